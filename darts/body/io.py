@@ -1,0 +1,176 @@
+"""Loading SMPL-format body files (official SMPL / SMPL-H / SMPL-X ``.pkl`` and ``.npz``, and the
+bundled default body) and exporting a body in the official SMPL ``.npz`` layout.
+
+Legacy ``.pkl`` files hold chumpy arrays and scipy sparse matrices; they are read with a restricted
+unpickler that needs no chumpy and refuses any class outside numpy, scipy.sparse and chumpy.
+"""
+from __future__ import annotations
+
+import json
+import os
+import pickle
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse
+import torch
+
+from darts.body.model import BodyModel
+from darts.errors import DartsInputError
+from darts.fileio import read_npz, require_finite, require_keys, save_npz
+
+DEFAULT_BODY_PATH = Path(__file__).parent / "data" / "darts_default_body.npz"
+DEFAULT_BODY_NAME = "darts-default-v1"
+REQUIRED_KEYS = ("v_template", "shapedirs", "J_regressor", "weights", "kintree_table", "f")
+
+
+class _ChumpyStub:
+    """Stands in for any chumpy class while unpickling; keeps the pickled state."""
+
+    def __new__(cls, *args, **kwargs):
+        return object.__new__(cls)
+
+    def __setstate__(self, state):
+        self.state = state
+
+
+class _SMPLUnpickler(pickle.Unpickler):
+    """Unpickler for legacy SMPL pickles: numpy, scipy.sparse and chumpy stubs only."""
+
+    _ALLOWED = {
+        ("copy_reg", "_reconstructor"), ("copyreg", "_reconstructor"), ("__builtin__", "object"),
+        ("builtins", "object"), ("copyreg", "__newobj__"), ("builtins", "set"), ("__builtin__", "set"),
+        ("_codecs", "encode"),  # how protocol-2 pickles carry raw array bytes
+    }
+
+    def find_class(self, module, name):
+        if module.split(".")[0] == "chumpy":
+            return type(name, (_ChumpyStub,), {})
+        if module.startswith("scipy.sparse") and name.endswith(("_matrix", "_array")):
+            return getattr(scipy.sparse, name)
+        if module.startswith("numpy"):
+            module = module.replace("numpy.core", "numpy._core")
+            if name in ("_reconstruct", "ndarray", "dtype", "scalar", "_frombuffer"):
+                return super().find_class(module, name)
+        if (module, name) in self._ALLOWED:
+            return super().find_class(module, name)
+        raise pickle.UnpicklingError(f"refusing to load {module}.{name}")
+
+
+def _plain(value, key: str, source) -> np.ndarray:
+    """Turn a chumpy stub or a sparse matrix into a dense numpy array."""
+    if isinstance(value, _ChumpyStub):
+        state = value.state if isinstance(value.state, dict) else {}
+        if "x" not in state:
+            raise DartsInputError(source, f"'{key}' is a chumpy expression, not a plain chumpy array")
+        return _plain(state["x"], key, source)
+    if scipy.sparse.issparse(value):
+        return value.toarray()
+    return np.asarray(value)
+
+
+def _read_pkl(path: Path) -> dict:
+    try:
+        with open(path, "rb") as handle:
+            data = _SMPLUnpickler(handle, encoding="latin1").load()
+    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, IndexError, TypeError, ValueError) as exc:
+        raise DartsInputError(path, f"not a readable SMPL pickle ({exc})") from None
+    if not isinstance(data, dict):
+        raise DartsInputError(path, f"expected a dict of arrays, found {type(data).__name__}")
+    return {key: _plain(value, key, path) for key, value in data.items() if key in REQUIRED_KEYS + ("posedirs",)}
+
+
+def _read_arrays(path: Path) -> dict:
+    if not path.is_file():
+        raise DartsInputError(path, "no such file")
+    if path.suffix.lower() == ".pkl":
+        return _read_pkl(path)
+    if path.suffix.lower() == ".npz":
+        return read_npz(path)
+    raise DartsInputError(path, "unknown body file type (expected .npz or .pkl)")
+
+
+def _parents_from_kintree(kintree: np.ndarray, num_joints: int, source) -> np.ndarray:
+    if kintree.ndim != 2 or kintree.shape != (2, num_joints):
+        raise DartsInputError(source, f"'kintree_table' has shape {kintree.shape}, expected (2, {num_joints})")
+    parents = kintree[0].astype(np.int64)
+    parents[0] = -1
+    if (parents[1:] < 0).any() or (parents[1:] >= np.arange(1, num_joints)).any():
+        raise DartsInputError(source, "'kintree_table' must list every parent before its children")
+    return parents
+
+
+def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=torch.float32) -> BodyModel:
+    """Validate SMPL-layout arrays and build a BodyModel; every problem names ``source``."""
+    require_keys(arrays, REQUIRED_KEYS, source)
+    for key in REQUIRED_KEYS + ("posedirs",):
+        if key in arrays:
+            require_finite(key, np.asarray(arrays[key]), source)
+    v_template = np.asarray(arrays["v_template"], np.float64)
+    if v_template.ndim != 2 or v_template.shape[1] != 3 or len(v_template) < 4:
+        raise DartsInputError(source, f"'v_template' has shape {v_template.shape}, expected [V, 3]")
+    nv = len(v_template)
+    faces = np.asarray(arrays["f"]).astype(np.int64)
+    if faces.ndim != 2 or faces.shape[1] != 3 or faces.min(initial=0) < 0 or faces.max(initial=0) >= nv:
+        raise DartsInputError(source, f"'f' must be [F, 3] indices into {nv} vertices")
+    shapedirs = np.asarray(arrays["shapedirs"], np.float64)
+    if shapedirs.ndim != 3 or shapedirs.shape[:2] != (nv, 3):
+        raise DartsInputError(source, f"'shapedirs' has shape {shapedirs.shape}, expected [{nv}, 3, K]")
+    weights = np.asarray(arrays["weights"], np.float64)
+    if weights.ndim != 2 or weights.shape[0] != nv:
+        raise DartsInputError(source, f"'weights' has shape {weights.shape}, expected [{nv}, J]")
+    nj = weights.shape[1]
+    regressor = np.asarray(arrays["J_regressor"], np.float64)
+    if regressor.shape != (nj, nv):
+        raise DartsInputError(source, f"'J_regressor' has shape {regressor.shape}, expected [{nj}, {nv}]")
+    parents = _parents_from_kintree(np.asarray(arrays["kintree_table"]).astype(np.int64), nj, source)
+    posedirs = arrays.get("posedirs")
+    if posedirs is not None:
+        posedirs = np.asarray(posedirs, np.float64)
+        if posedirs.shape != (nv, 3, 9 * (nj - 1)):
+            raise DartsInputError(source, f"'posedirs' has shape {posedirs.shape}, expected [{nv}, 3, {9 * (nj - 1)}]")
+        if not posedirs.any():
+            posedirs = None
+    as_tensor = lambda a: torch.as_tensor(a, dtype=dtype)  # noqa: E731
+    metadata = {}
+    if "metadata_json" in arrays:
+        metadata = json.loads(str(arrays["metadata_json"]))
+    return BodyModel(
+        name=name or metadata.get("name") or Path(source).stem,
+        v_template=as_tensor(v_template), faces=faces, shapedirs=as_tensor(shapedirs),
+        posedirs=None if posedirs is None else as_tensor(posedirs),
+        J_regressor=as_tensor(regressor), weights=as_tensor(weights), parents=parents,
+        gender=str(metadata.get("gender", "neutral")), metadata=metadata,
+    )
+
+
+def load_body(path: str | os.PathLike | None = None, dtype=torch.float32) -> BodyModel:
+    """The body in ``path`` (official SMPL/SMPL-H/SMPL-X .pkl or .npz), or the bundled default."""
+    source = Path(path) if path is not None else DEFAULT_BODY_PATH
+    arrays = _read_arrays(source)
+    model = body_from_arrays(arrays, source, dtype=dtype)
+    if "part_labels" in arrays:
+        model.metadata["part_labels"] = np.asarray(arrays["part_labels"]).astype(np.int64)
+    return model
+
+
+def export_smpl_npz(model: BodyModel, path: str | os.PathLike, betas=None) -> None:
+    """Write ``model`` in the official SMPL ``.npz`` layout. With ``betas`` the shape is baked into
+    ``v_template`` (shapedirs are kept, so further betas are relative to that shape)."""
+    v_shaped, _ = model.shaped(betas)
+    num_joints = model.num_joints
+    posedirs = model.posedirs
+    if posedirs is None:
+        posedirs = torch.zeros(model.num_vertices, 3, 9 * (num_joints - 1), dtype=model.dtype)
+    kintree = np.stack([model.parents, np.arange(num_joints)]).astype(np.int64)
+    kintree[0, 0] = -1
+    save_npz(
+        path,
+        v_template=v_shaped[0].detach().double().numpy(),
+        shapedirs=model.shapedirs.detach().double().numpy(),
+        posedirs=posedirs.detach().double().numpy(),
+        J_regressor=model.J_regressor.detach().double().numpy(),
+        weights=model.weights.detach().double().numpy(),
+        kintree_table=kintree,
+        f=model.faces.astype(np.uint32),
+    )

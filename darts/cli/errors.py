@@ -1,0 +1,20 @@
+"""Turning bad input into one clear line on stderr and exit code 2."""
+from __future__ import annotations
+
+import sys
+from typing import Callable
+
+from darts.errors import DartsInputError
+
+
+def run_guarded(prog: str, main: Callable[[list[str] | None], int], argv: list[str] | None = None) -> int:
+    """Run ``main``; a DartsInputError prints ``prog: error: FILE: problem`` and returns 2 instead
+    of a traceback (anything else is a bug and keeps its traceback)."""
+    try:
+        return main(argv) or 0
+    except DartsInputError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,170 @@
+"""The ``darts`` command: body and motion tools.
+
+    darts body info [--body PATH] [--betas B ...] [--json]
+    darts body export -o body.npz [--body PATH] [--betas B ...]
+    darts body pose MOTION -o OUT.npz [--fps F] [--body PATH] [--betas B ...] [--ground]
+    darts motion info MOTION [--json]
+
+MOTION is an AMASS-format .npz, or the name of a shipped motion (walk, run, wave, jumping_jacks,
+twist, squat). Bad input prints one ``darts: error: FILE: problem`` line and exits with code 2.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+import numpy as np
+import torch
+
+from darts import __version__
+from darts.body.io import export_smpl_npz, load_body
+from darts.cli.errors import run_guarded
+from darts.errors import DartsInputError
+from darts.fileio import save_npz
+from darts.motion.amass import load_motion
+from darts.motion.posing import motion_betas, pose_sequence
+from darts.motion.resample import resample
+from scenes import resolve_motion, shipped_motions
+
+
+def _add_body_args(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--body", metavar="PATH", help="SMPL / SMPL-H / SMPL-X model file (.pkl or .npz); default: the bundled body")
+    parser.add_argument("--betas", type=float, nargs="+", metavar="B", help="shape coefficients (at most the model's count)")
+
+
+def _positive_fps(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not np.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"fps must be positive, got {text}")
+    return value
+
+
+def _check_betas(model, betas) -> None:
+    if betas is not None and len(betas) > model.num_betas:
+        raise DartsInputError(None, f"--betas has {len(betas)} values, the body has {model.num_betas} shape directions")
+    if betas is not None and not np.isfinite(betas).all():
+        raise DartsInputError(None, "--betas must be finite numbers")
+
+
+def body_info(args) -> int:
+    model = load_body(args.body)
+    _check_betas(model, args.betas)
+    vertices, joints = model.shaped(args.betas)
+    vertices, joints = vertices[0].numpy(), joints[0].numpy()
+    names = model.joint_names
+    info = {
+        "name": model.name, "kind": model.kind, "gender": model.gender,
+        "vertices": model.num_vertices, "faces": int(len(model.faces)), "joints": model.num_joints,
+        "betas": model.num_betas, "pose_correctives": model.posedirs is not None,
+        "height_m": round(float(vertices[:, 1].max() - vertices[:, 1].min()), 4),
+        "joint_names": names, "parents": model.parents.tolist(),
+    }
+    if args.json:
+        print(json.dumps(info, indent=1))
+        return 0
+    print(f"body        {info['name']} ({info['kind']}, {info['gender']})")
+    print(f"vertices    {info['vertices']}\nfaces       {info['faces']}\njoints      {info['joints']}")
+    print(f"betas       {info['betas']}\ncorrectives {'yes' if info['pose_correctives'] else 'none (posedirs zero)'}")
+    print(f"height      {info['height_m']:.3f} m (rest pose, canonical frame, Y up)")
+    for i, name in enumerate(names):
+        parent = names[model.parents[i]] if model.parents[i] >= 0 else "-"
+        print(f"  {i:2d} {name:16s} parent {parent:16s} at {np.round(joints[i].astype(float), 3).tolist()}")
+    return 0
+
+
+def body_export(args) -> int:
+    model = load_body(args.body)
+    _check_betas(model, args.betas)
+    export_smpl_npz(model.to(torch.float64), args.output, betas=args.betas)
+    print(f"wrote {args.output} ({model.num_vertices} vertices, {model.num_joints} joints)")
+    return 0
+
+
+def _load_motion_arg(text: str):
+    return load_motion(resolve_motion(text))
+
+
+def body_pose(args) -> int:
+    model = load_body(args.body)
+    _check_betas(model, args.betas)
+    motion = _load_motion_arg(args.motion)
+    if args.fps is not None:
+        motion = resample(motion, args.fps)
+    started = time.perf_counter()
+    vertices, joints = pose_sequence(model, motion, betas=args.betas, ground=args.ground, progress=True)
+    if not (np.isfinite(vertices).all() and np.isfinite(joints).all()):
+        raise DartsInputError(args.motion, "posing produced NaN or infinite vertices")
+    save_npz(args.output, vertices=vertices, joints=joints, faces=model.faces.astype(np.int32),
+             fps=np.array(motion.fps), betas=motion_betas(model, motion, args.betas),
+             frame=np.array("AMASS world: Z up, metres"))
+    print(f"wrote {args.output}: {motion.num_frames} frames at {motion.fps:g} fps, "
+          f"{model.num_vertices} vertices ({time.perf_counter() - started:.1f} s); lowest point z = {vertices[..., 2].min():.3f} m")
+    return 0
+
+
+def motion_info(args) -> int:
+    path = resolve_motion(args.motion)
+    motion = load_motion(path)
+    info = {
+        "path": str(path), "format": motion.source_format, "frames": motion.num_frames,
+        "fps": motion.fps, "duration_s": round(motion.duration, 4), "gender": motion.gender,
+        "joints": {name: int(arr.shape[1]) for name, arr in motion.parts().items()},
+        "betas": 0 if motion.betas is None else int(motion.betas.size),
+        "travel_m": round(float(np.linalg.norm(motion.trans[-1, :2] - motion.trans[0, :2])), 4),
+    }
+    if args.json:
+        print(json.dumps(info, indent=1))
+        return 0
+    for key, value in info.items():
+        print(f"{key:11s} {value}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="darts", description="DARTs: bodies, motions and garment templates.",
+                                     epilog=f"shipped motions: {', '.join(shipped_motions())}")
+    parser.add_argument("--version", action="version", version=f"darts {__version__}")
+    groups = parser.add_subparsers(dest="group", required=True, metavar="{body,motion}")
+
+    body = groups.add_parser("body", help="the SMPL-format body model").add_subparsers(dest="command", required=True)
+    info = body.add_parser("info", help="vertex/face/joint counts, joint names, height")
+    _add_body_args(info)
+    info.add_argument("--json", action="store_true", help="print JSON")
+    info.set_defaults(run=body_info)
+    export = body.add_parser("export", help="write the body in the official SMPL .npz layout")
+    _add_body_args(export)
+    export.add_argument("-o", "--output", required=True, metavar="OUT.npz")
+    export.set_defaults(run=body_export)
+    pose = body.add_parser("pose", help="pose the body by an AMASS motion (vertices and joints in Z-up world)")
+    pose.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
+    pose.add_argument("-o", "--output", required=True, metavar="OUT.npz")
+    pose.add_argument("--fps", type=_positive_fps, help="resample to this frame rate")
+    pose.add_argument("--ground", action="store_true", help="shift the sequence so its lowest point touches z = 0")
+    _add_body_args(pose)
+    pose.set_defaults(run=body_pose)
+
+    motion = groups.add_parser("motion", help="AMASS-format motions").add_subparsers(dest="command", required=True)
+    minfo = motion.add_parser("info", help="format, frames, fps, duration, joints")
+    minfo.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
+    minfo.add_argument("--json", action="store_true", help="print JSON")
+    minfo.set_defaults(run=motion_info)
+    return parser
+
+
+def _main(argv: list[str] | None) -> int:
+    args = build_parser().parse_args(argv)
+    return args.run(args)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Console entry point of ``darts``."""
+    return run_guarded("darts", _main, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

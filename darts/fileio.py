@@ -1,0 +1,70 @@
+"""Reading and writing files safely: whole-file atomic writes and validated ``.npz`` reading."""
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from darts.errors import DartsInputError
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike):
+    """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual permissions
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def save_npz(path: str | os.PathLike, compressed: bool = True, **arrays) -> None:
+    """Write arrays to ``path`` exactly (no ``.npz`` appended), atomically."""
+    with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+        (np.savez_compressed if compressed else np.savez)(handle, **arrays)
+
+
+def check_npz_file(path: Path) -> None:
+    """Raise a DartsInputError unless ``path`` is an existing zip archive (what .npz files are)."""
+    if not path.is_file():
+        raise DartsInputError(path, "no such file")
+    if not zipfile.is_zipfile(path):
+        raise DartsInputError(path, "not a valid .npz archive (not a zip file)")
+
+
+def read_npz(path: str | os.PathLike, allow_pickle: bool = False) -> dict[str, np.ndarray]:
+    """All arrays of an ``.npz`` archive, or a DartsInputError naming the file and what is wrong."""
+    path = Path(path)
+    check_npz_file(path)
+    try:
+        with np.load(path, allow_pickle=allow_pickle) as archive:
+            return {key: archive[key] for key in archive.files}
+    except (zipfile.BadZipFile, EOFError, OSError) as exc:
+        raise DartsInputError(path, f"not a valid .npz archive ({exc})") from None
+    except ValueError as exc:
+        raise DartsInputError(path, f"not a plain numeric .npz archive ({exc})") from None
+
+
+def require_keys(arrays: dict, keys, source) -> None:
+    """Raise a DartsInputError listing every key of ``keys`` missing from ``arrays``."""
+    missing = [key for key in keys if key not in arrays]
+    if missing:
+        raise DartsInputError(source, f"missing key(s) {', '.join(missing)}")
+
+
+def require_finite(name: str, array: np.ndarray, source) -> None:
+    """Raise a DartsInputError if a numeric array holds NaN or infinity."""
+    if array.dtype.kind in "fc" and not np.isfinite(array).all():
+        raise DartsInputError(source, f"'{name}' contains NaN or infinite values")
