@@ -85,14 +85,10 @@ def body_export(args) -> int:
     return 0
 
 
-def _load_motion_arg(text: str):
-    return load_motion(resolve_motion(text))
-
-
 def body_pose(args) -> int:
     model = load_body(args.body)
     _check_betas(model, args.betas)
-    motion = _load_motion_arg(args.motion)
+    motion = load_motion(resolve_motion(args.motion))
     if args.fps is not None:
         motion = resample(motion, args.fps)
     started = time.perf_counter()

@@ -31,16 +31,24 @@ def smoothstep(t0: float, t1: float, t: np.ndarray) -> np.ndarray:
     return s * s * (3 - 2 * s)
 
 
-def rx(a):
-    return Rotation.from_rotvec(np.outer(np.broadcast_to(a, np.shape(a) or (1,)), [1.0, 0, 0]))
+def _about(axis: int, angles) -> Rotation:
+    """Rotations by ``angles`` (radians, scalar or [T]) about a canonical axis (0 = X, 1 = Y, 2 = Z)."""
+    angles = np.atleast_1d(np.asarray(angles, np.float64))
+    rotvecs = np.zeros((len(angles), 3))
+    rotvecs[:, axis] = angles
+    return Rotation.from_rotvec(rotvecs)
 
 
-def ry(a):
-    return Rotation.from_rotvec(np.outer(np.broadcast_to(a, np.shape(a) or (1,)), [0, 1.0, 0]))
+def rx(angles) -> Rotation:
+    return _about(0, angles)
 
 
-def rz(a):
-    return Rotation.from_rotvec(np.outer(np.broadcast_to(a, np.shape(a) or (1,)), [0, 0, 1.0]))
+def ry(angles) -> Rotation:
+    return _about(1, angles)
+
+
+def rz(angles) -> Rotation:
+    return _about(2, angles)
 
 
 def arms_down(t, lower: float = 1.25, swing_left=0.0, swing_right=0.0, elbow: float = 0.25) -> dict:
@@ -59,25 +67,51 @@ def legs(t, hip_l, hip_r, knee_l, knee_r, ankle_l=0.0, ankle_r=0.0) -> dict:
             "right_knee": rx(knee_r + z), "left_ankle": rx(ankle_l + z), "right_ankle": rx(ankle_r + z)}
 
 
-def walk(t):
-    phase = 2 * np.pi * t / 1.1
+@dataclass(frozen=True)
+class Gait:
+    """A walking or running cycle (angles in radians): each hip swings about ``hip_bias`` by
+    ``hip_swing``; each knee bends ``knee_bend`` plus ``knee_lift`` * max(cos, 0)^``knee_sharpness``
+    while its leg swings through; arms hang ``arm_lower`` below the T-pose and swing against the legs."""
+
+    period: float
+    hip_bias: float
+    hip_swing: float
+    knee_bend: float
+    knee_lift: float
+    knee_sharpness: float
+    ankle: float
+    arm_lower: float
+    arm_swing: float
+    elbow: float
+    pelvis_yaw: float
+
+
+WALK = Gait(1.1, 0.12, 0.32, 0.08, 0.95, 2.0, 0.12, 1.25, 0.3, 0.3, 0.06)
+RUN = Gait(0.72, 0.25, 0.55, 0.3, 1.5, 1.5, 0.15, 1.2, 0.6, 1.4, 0.1)
+
+
+def gait(t, g: Gait):
+    """Pose, root rotation and cycle phase (radians) of a gait at times t."""
+    phase = 2 * np.pi * t / g.period
     s, c = np.sin(phase), np.cos(phase)
-    pose = legs(t, -(0.12 + 0.32 * s), -(0.12 - 0.32 * s), 0.08 + 0.95 * np.maximum(c, 0) ** 2,
-                0.08 + 0.95 * np.maximum(-c, 0) ** 2, 0.12 * s, -0.12 * s)
-    pose.update(arms_down(t, 1.25, 0.3 * s, -0.3 * s, 0.3))
-    pose["spine2"] = ry(-0.06 * s)
-    return pose, ry(0.06 * s), 0 * t
+    pose = legs(t, -(g.hip_bias + g.hip_swing * s), -(g.hip_bias - g.hip_swing * s),
+                g.knee_bend + g.knee_lift * np.maximum(c, 0) ** g.knee_sharpness,
+                g.knee_bend + g.knee_lift * np.maximum(-c, 0) ** g.knee_sharpness, g.ankle * s, -g.ankle * s)
+    pose.update(arms_down(t, g.arm_lower, g.arm_swing * s, -g.arm_swing * s, g.elbow))
+    return pose, ry(g.pelvis_yaw * s), phase
+
+
+def walk(t):
+    pose, root, phase = gait(t, WALK)
+    pose["spine2"] = ry(-0.06 * np.sin(phase))
+    return pose, root, 0 * t
 
 
 def run(t):
-    phase = 2 * np.pi * t / 0.72
-    s, c = np.sin(phase), np.cos(phase)
-    pose = legs(t, -(0.25 + 0.55 * s), -(0.25 - 0.55 * s), 0.3 + 1.5 * np.maximum(c, 0) ** 1.5,
-                0.3 + 1.5 * np.maximum(-c, 0) ** 1.5, 0.15 * s, -0.15 * s)
-    pose.update(arms_down(t, 1.2, 0.6 * s, -0.6 * s, 1.4))
+    pose, root, phase = gait(t, RUN)
     pose["spine1"] = rx(0.12 + 0 * t)
     flight = 0.05 * np.maximum(0.0, -np.cos(2 * phase)) ** 2
-    return pose, ry(0.1 * s), flight
+    return pose, root, flight
 
 
 def wave(t):

@@ -1,0 +1,93 @@
+"""Render the figures of docs/body.md and docs/motions.md (needs matplotlib: pip install matplotlib).
+
+Flat-shaded meshes drawn with the painter's algorithm, orthographic views.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.collections import PolyCollection  # noqa: E402
+
+from darts.body.io import load_body  # noqa: E402
+from darts.body.segmentation import PART_NAMES, body_segmentation  # noqa: E402
+from darts.motion.amass import load_motion  # noqa: E402
+from darts.motion.posing import pose_sequence  # noqa: E402
+from scenes import MOTIONS_DIR  # noqa: E402
+
+
+def draw_mesh(ax, vertices, faces, colors, right, up):
+    """Project onto (right, up), sort triangles back to front, shade by |n . view| (Lambert)."""
+    view = np.cross(right, up)
+    tri = vertices[faces]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True) + 1e-12
+    facing = normals @ view
+    keep = facing > 0
+    order = np.argsort((tri[keep] @ view).mean(1))
+    shade = (0.35 + 0.65 * facing[keep][order])[:, None]
+    polys = np.stack([tri[keep][order] @ right, tri[keep][order] @ up], -1)
+    ax.add_collection(PolyCollection(polys, facecolors=np.clip(colors[keep][order] * shade, 0, 1), edgecolors="none"))
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.axis("off")
+
+
+def body_figure(out: Path) -> None:
+    body = load_body()
+    vertices = body.shaped()[0][0].numpy()
+    labels = body_segmentation(body)
+    palette = plt.get_cmap("tab20")(np.arange(len(PART_NAMES)) % 20)[:, :3]
+    colors = palette[labels[body.faces].max(1)]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 6), gridspec_kw={"width_ratios": [2.2, 1]})
+    draw_mesh(axes[0], vertices, body.faces, colors, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+    draw_mesh(axes[1], vertices, body.faces, colors, np.array([0, 0, 1.0]), np.array([0, 1.0, 0]))
+    handles = [plt.Rectangle((0, 0), 1, 1, color=palette[i]) for i in range(len(PART_NAMES))]
+    fig.legend(handles, PART_NAMES, loc="lower center", ncol=6, fontsize=8, frameon=False)
+    axes[0].set_title("front (canonical frame, Y up)")
+    axes[1].set_title("side (front +Z to the right)")
+    fig.savefig(out, dpi=90, bbox_inches="tight")
+    plt.close(fig)
+
+
+def motions_figure(out: Path, names: list[str], frames_per_motion: int = 5) -> None:
+    body = load_body()
+    fig, axes = plt.subplots(len(names), frames_per_motion, figsize=(2.2 * frames_per_motion, 2.6 * len(names)))
+    grey = np.full((len(body.faces), 3), 0.75)
+    for row, name in enumerate(names):
+        motion = load_motion(MOTIONS_DIR / f"{name}.npz")
+        vertices, _ = pose_sequence(body, motion)
+        times = [0.0] + [0.5 + 0.75 * k for k in range(frames_per_motion - 1)]  # off the 1 s beat of the jacks
+        for col, frame in enumerate(np.minimum(np.round(np.array(times) * motion.fps).astype(int), motion.num_frames - 1)):
+            ax = axes[row, col]
+            centred = vertices[frame] - [motion.trans[frame, 0], motion.trans[frame, 1], 0]
+            # Seen from the front-left (the body faces -Y in the AMASS world).
+            right = np.array([np.cos(0.6), np.sin(0.6), 0.0])
+            draw_mesh(ax, centred, body.faces, grey, right, np.array([0, 0, 1.0]))
+            ax.plot([-0.9, 0.9], [0, 0], color="k", lw=0.8)
+            ax.set_xlim(-1.0, 1.0)
+            ax.set_ylim(-0.05, 2.3)
+            ax.set_title(f"{name} {frame / motion.fps:.1f} s", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=70)
+    plt.close(fig)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("-o", "--output-dir", default="docs/images")
+    args = parser.parse_args()
+    out = Path(args.output_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    body_figure(out / "default_body.png")
+    motions_figure(out / "motions.png", ["walk", "run", "wave", "jumping_jacks", "twist", "squat"])
+    print(f"wrote {out}/default_body.png and {out}/motions.png")
+
+
+if __name__ == "__main__":
+    main()
