@@ -30,7 +30,7 @@ def pose_sequence(model: BodyModel, motion: Motion, betas=None, ground: bool = F
     joints = np.empty((motion.num_frames, model.num_joints, 3), np.float32)
     with torch.no_grad():
         for start in tqdm(range(0, motion.num_frames, chunk), desc="posing", unit="chunk",
-                          disable=not progress, leave=False):
+                          disable=None if progress else True, leave=False):
             stop = min(start + chunk, motion.num_frames)
             out = model(pose[start:stop], betas=shape, trans=motion.trans[start:stop])
             vertices[start:stop] = out.vertices.numpy()
