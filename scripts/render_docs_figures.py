@@ -12,30 +12,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.collections import PolyCollection  # noqa: E402
 
 from darts.body.io import load_body  # noqa: E402
+from darts.render import draw_mesh  # noqa: E402
 from darts.body.segmentation import PART_NAMES, body_segmentation  # noqa: E402
 from darts.motion.amass import load_motion  # noqa: E402
 from darts.motion.posing import pose_sequence  # noqa: E402
 from scenes import MOTIONS_DIR  # noqa: E402
-
-
-def draw_mesh(ax, vertices, faces, colors, right, up):
-    """Project onto (right, up), sort triangles back to front, shade by |n . view| (Lambert)."""
-    view = np.cross(right, up)
-    tri = vertices[faces]
-    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    normals /= np.linalg.norm(normals, axis=1, keepdims=True) + 1e-12
-    facing = normals @ view
-    keep = facing > 0
-    order = np.argsort((tri[keep] @ view).mean(1))
-    shade = (0.35 + 0.65 * facing[keep][order])[:, None]
-    polys = np.stack([tri[keep][order] @ right, tri[keep][order] @ up], -1)
-    ax.add_collection(PolyCollection(polys, facecolors=np.clip(colors[keep][order] * shade, 0, 1), edgecolors="none"))
-    ax.set_aspect("equal")
-    ax.autoscale_view()
-    ax.axis("off")
 
 
 def body_figure(out: Path) -> None:

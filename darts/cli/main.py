@@ -4,6 +4,10 @@
     darts body export -o body.npz [--body PATH] [--betas B ...]
     darts body pose MOTION -o OUT.npz [--fps F] [--body PATH] [--betas B ...] [--ground]
     darts motion info MOTION [--json]
+    darts template CATEGORY -o garment.npz [--edge-length L] [--seam NAME=REGIME[:STIFFNESS]] [--accessory collar|tie]
+    darts template --list
+    darts inspect garment.npz [--json] [--png out.png]
+    darts export garment.npz -o out.obj|ply|glb
 
 MOTION is an AMASS-format .npz, or the name of a shipped motion (walk, run, wave, jumping_jacks,
 twist, squat). Bad input prints one ``darts: error: FILE: problem`` line and exits with code 2.
@@ -21,6 +25,7 @@ import torch
 from darts import __version__
 from darts.body.io import export_smpl_npz, load_body
 from darts.cli.errors import run_guarded
+from darts.cli.garment import add_parsers as add_garment_parsers
 from darts.errors import DartsInputError
 from darts.fileio import save_npz
 from darts.motion.amass import load_motion
@@ -125,7 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="darts", description="DARTs: bodies, motions and garment templates.",
                                      epilog=f"shipped motions: {', '.join(shipped_motions())}")
     parser.add_argument("--version", action="version", version=f"darts {__version__}")
-    groups = parser.add_subparsers(dest="group", required=True, metavar="{body,motion}")
+    groups = parser.add_subparsers(dest="group", required=True, metavar="{body,motion,template,inspect,export}")
 
     body = groups.add_parser("body", help="the SMPL-format body model").add_subparsers(dest="command", required=True)
     info = body.add_parser("info", help="vertex/face/joint counts, joint names, height")
@@ -149,6 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
     minfo.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
     minfo.add_argument("--json", action="store_true", help="print JSON")
     minfo.set_defaults(run=motion_info)
+    add_garment_parsers(groups, _add_body_args)
     return parser
 
 

@@ -1,0 +1,136 @@
+"""``darts template``, ``darts inspect`` and ``darts export``: making, describing and exporting DARTs."""
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from darts.body.io import load_body
+from darts.dart.accessories import ACCESSORIES
+from darts.dart.build import make_dart
+from darts.dart.export import MESH_FORMATS, export_mesh, panel_colors
+from darts.dart.io import load_dart, save_dart
+from darts.dart.model import MATERIALS, Dart, parse_seam_setting
+from darts.errors import DartsInputError
+from darts.fileio import atomic_path
+from darts.geometry.mesh import vertex_normals
+from darts.templates.build import DEFAULT_EDGE_LENGTH
+from darts.templates.categories import CATEGORIES
+
+
+def template(args) -> int:
+    if args.list:
+        print("\n".join(CATEGORIES))
+        return 0
+    if args.category is None or args.output is None:
+        raise DartsInputError(None, "darts template needs CATEGORY and -o OUT.npz (or --list)")
+    if args.category not in CATEGORIES:
+        raise DartsInputError(None, f"unknown category '{args.category}' (see 'darts template --list')")
+    seams = [parse_seam_setting(text) for text in args.seam]
+    body = load_body(args.body)
+    dart = make_dart(args.category, body, args.betas, args.edge_length, seams, args.accessory, args.material)
+    save_dart(dart, args.output)
+    print(f"wrote {args.output}: {args.category}, {len(dart.vertices)} vertices, {len(dart.faces)} faces, "
+          f"{len(dart.panel_names)} panels, {len(dart.seams)} seams, {len(dart.pairs)} seam pairs")
+    return 0
+
+
+def summary(dart: Dart) -> dict:
+    """Counts, panels, seams with regimes, feature lines with lengths (metres)."""
+    def length(loop):
+        pts = dart.vertices[loop].astype(np.float64)
+        return float(np.linalg.norm(pts - np.roll(pts, -1, axis=0), axis=1).sum())
+
+    counts = np.bincount(dart.pair_seam, minlength=len(dart.seams))
+    active = np.bincount(dart.pair_seam, weights=dart.pair_active, minlength=len(dart.seams))
+    gaps = dart.seam_gaps()
+    return {
+        "category": dart.category, "vertices": len(dart.vertices), "faces": len(dart.faces),
+        "body_model": dart.body_model, "material": dart.material_name, "accessories": dart.accessories,
+        "panels": {name: int((dart.panel == i).sum()) for i, name in enumerate(dart.panel_names)},
+        "seams": {s.name: {"regime": s.regime, "stiffness": s.stiffness, "rest_length": s.rest_length,
+                           "pairs": int(counts[i]), "active_pairs": int(active[i]), "max_gap": gaps[s.name]["max"]}
+                  for i, s in enumerate(dart.seams)},
+        "lines": {name: {"vertices": len(loop), "length_m": round(length(loop), 4)} for name, loop in dart.lines.items()},
+    }
+
+
+def render_png(dart: Dart, path) -> None:
+    """Front and back views, panels coloured, seam pairs drawn as dots."""
+    import matplotlib.pyplot as plt
+
+    from darts.render import BACK, FRONT, draw_mesh
+
+    colors = panel_colors(len(dart.panel_names))[dart.panel]
+    vertices = dart.vertices.astype(np.float64)
+    normals = vertex_normals(vertices, dart.faces.astype(np.int64))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 6))
+    for ax, (right, up), title in zip(axes, (FRONT, BACK), ("front", "back")):
+        draw_mesh(ax, vertices, dart.faces, colors, right, up, two_sided=True)
+        ends = dart.pairs[:, 0]
+        visible = normals[ends] @ np.cross(right, up) > 0
+        ax.scatter(vertices[ends[visible]] @ right, vertices[ends[visible]] @ up, s=2, c="k")
+        ax.set_title(f"{dart.category} ({title})")
+    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in panel_colors(len(dart.panel_names))]
+    fig.legend(handles, dart.panel_names, loc="lower center", ncol=min(len(handles), 6), fontsize=8, frameon=False)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=90, bbox_inches="tight", format="png")
+    plt.close(fig)
+
+
+def inspect(args) -> int:
+    dart = load_dart(args.garment)
+    info = summary(dart)
+    if args.png:
+        render_png(dart, args.png)
+    if args.json:
+        print(json.dumps(info, indent=1))
+        return 0
+    print(f"{info['category']}: {info['vertices']} vertices, {info['faces']} faces, body {info['body_model']}, "
+          f"material {info['material']}, accessories {', '.join(info['accessories']) or 'none'}")
+    print("panels:  " + ", ".join(f"{k} ({v} faces)" for k, v in info["panels"].items()))
+    print("seams:")
+    for name, seam in info["seams"].items():
+        print(f"  {name:16s} {seam['regime']:9s} stiffness {seam['stiffness']:8.1f} N/m  rest {seam['rest_length']:.3f} m  "
+              f"pairs {seam['pairs']:4d} ({seam['active_pairs']} active)  max gap {seam['max_gap'] * 1e3:.2f} mm")
+    print("feature lines:")
+    for name, line in info["lines"].items():
+        print(f"  {name:12s} {line['vertices']:4d} vertices, {line['length_m']:.3f} m")
+    if args.png:
+        print(f"wrote {args.png}")
+    return 0
+
+
+def export(args) -> int:
+    dart = load_dart(args.garment)
+    export_mesh(dart, args.output)
+    print(f"wrote {args.output}: {len(dart.vertices)} vertices, {len(dart.panel_names)} panel colours")
+    return 0
+
+
+def add_parsers(groups, add_body_args) -> None:
+    """Register the garment subcommands on the ``darts`` parser."""
+    make = groups.add_parser("template", help="build a DART (garment.npz) for a category")
+    make.add_argument("category", nargs="?", metavar="CATEGORY", help="a category id (see --list)")
+    make.add_argument("-o", "--output", metavar="OUT.npz")
+    make.add_argument("--list", action="store_true", help="print the category ids, one per line")
+    make.add_argument("--edge-length", type=float, default=DEFAULT_EDGE_LENGTH, metavar="L",
+                      help=f"target edge length in metres (default {DEFAULT_EDGE_LENGTH})")
+    make.add_argument("--seam", action="append", default=[], metavar="NAME=REGIME[:STIFFNESS]",
+                      help="seam regime: welded, stiff, loose, repulsive or partial; NAME 'all' sets every seam")
+    make.add_argument("--accessory", action="append", default=[], choices=ACCESSORIES, help="stitch a collar or a tie")
+    make.add_argument("--material", default="cotton", choices=sorted(MATERIALS))
+    add_body_args(make)
+    make.set_defaults(run=template)
+
+    show = groups.add_parser("inspect", help="counts, panels, seams and feature lines of a DART")
+    show.add_argument("garment", metavar="GARMENT.npz")
+    show.add_argument("--json", action="store_true", help="print JSON")
+    show.add_argument("--png", metavar="OUT.png", help="also draw the garment, panels coloured, seams dotted")
+    show.set_defaults(run=inspect)
+
+    out = groups.add_parser("export", help=f"write a DART as a mesh ({', '.join(MESH_FORMATS)}) with panel colours")
+    out.add_argument("garment", metavar="GARMENT.npz")
+    out.add_argument("-o", "--output", required=True, metavar="OUT")
+    out.set_defaults(run=export)

@@ -1,0 +1,21 @@
+"""Isotropic remeshing (Botsch & Kobbelt 2004, via gpytoolbox) that keeps boundaries and seams."""
+from __future__ import annotations
+
+import numpy as np
+
+from darts.geometry.mesh import boundary_edges
+
+
+def remesh(vertices: np.ndarray, faces: np.ndarray, edge_length: float, feature_edges: np.ndarray | None = None,
+           iterations: int = 10) -> tuple[np.ndarray, np.ndarray]:
+    """Remesh to edges of about ``edge_length`` metres, projected onto the input surface. Boundary
+    edges (and ``feature_edges`` [E,2]) are resampled along themselves: the outline is kept."""
+    import gpytoolbox
+
+    features = boundary_edges(faces)
+    if feature_edges is not None and len(feature_edges):
+        features = np.concatenate([features, feature_edges])
+    v, f = gpytoolbox.remesh_botsch(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int32),
+                                    i=iterations, h=float(edge_length), project=True,
+                                    feature_edges=np.ascontiguousarray(features, np.int32))
+    return np.asarray(v, np.float64), np.asarray(f, np.int64)

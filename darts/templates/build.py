@@ -1,0 +1,221 @@
+"""Building a garment template from a body: cut, remesh, insert seams, add ease, name feature lines.
+
+Tops, dresses' bodices and pants are cut from the body surface along feature-line fields (head,
+hands and feet never included). Skirts and dresses' skirts are one tube cut from the remeshed
+convex hull of the lower body (paper, Fig. 3); a dress's bodice and skirt are joined by a strip and
+remeshed as one surface. Everything is in the body's canonical frame (Y up), in metres.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from darts.body.model import BodyModel
+from darts.errors import DartsInputError
+from darts.geometry.distance import SurfaceDistance
+from darts.geometry.levelset import compact, insert_level_set, keep_side
+from darts.geometry.mesh import boundary_loops, directed_edges, vertex_normals
+from darts.geometry.remesh import remesh
+from darts.templates.categories import CATEGORIES, SIDES, Category, seam_fields
+from darts.templates.landmarks import (Landmarks, above_field, arm_field, below_field, landmarks,
+                                       neckline_field)
+
+DEFAULT_EDGE_LENGTH = 0.011  # metres: a short-sleeve top gets about 6k vertices on the default body
+DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal
+
+
+@dataclass
+class Template:
+    """A garment surface before it is split into panels. ``seam_edges`` maps seam names to
+    undirected edges [E,2]; ``lines`` maps feature-line names to ordered closed vertex loops."""
+
+    category: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    lines: dict[str, np.ndarray]
+    seam_edges: dict[str, np.ndarray]
+    hull: tuple[np.ndarray, np.ndarray] | None = None
+    landmarks: Landmarks | None = field(default=None, repr=False)
+
+
+def _largest_component(vertices, faces, seed: np.ndarray):
+    """Keep the connected component nearest to ``seed``."""
+    edges = directed_edges(faces)
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(vertices),) * 2)
+    _, labels = connected_components(graph, directed=False)
+    keep = labels[np.argmin(np.linalg.norm(vertices - seed, axis=1))]
+    v, f, _ = compact(vertices, faces[labels[faces[:, 0]] == keep])
+    return v, f
+
+
+def _cut(vertices, faces, fields, seed):
+    for fn in fields:
+        vertices, faces, _ = keep_side(vertices, faces, fn(vertices))
+        vertices, faces = _largest_component(vertices, faces, seed)
+    return vertices, faces
+
+
+def _body_cuts(category: Category, lm: Landmarks, bottom: float | None) -> list:
+    """Fields removing what a top/bodice/pants does not cover."""
+    if category.family == "pants":
+        hem = category.hem(lm)
+        return [lambda p: above_field(lm.waist_y, p), lambda p: below_field(hem, p)]
+    cuts = [lambda p: neckline_field(lm, p)]
+    position = 0.0 if category.sleeve is None else category.sleeve
+    cuts += [lambda p, s=s: arm_field(lm, p, s, position) for s in SIDES]
+    cuts.append(lambda p: below_field(bottom, p))
+    return cuts
+
+
+def lower_body_hull(body_vertices: np.ndarray, lm: Landmarks, edge_length: float):
+    """The convex hull of the body below the waist, isotropically remeshed (closed)."""
+    hull = trimesh.convex.convex_hull(body_vertices[body_vertices[:, 1] < lm.waist_y + 0.03])
+    v, f = np.asarray(hull.vertices, np.float64), np.asarray(hull.faces, np.int64)
+    # Split the long hull facets first so the remesher projects onto the hull, not across it.
+    v, f = trimesh.remesh.subdivide_to_size(v, f, max_edge=edge_length * 2)
+    return remesh(v, f, edge_length)
+
+
+def _bridge(vertices, faces, upper_loop, lower_loop):
+    """Join two loops around the vertical axis with a strip of triangles, oriented like ``faces``."""
+    centre = vertices[upper_loop].mean(0)
+
+    def ordered(loop):
+        """The loop turning counter-clockwise about the axis from its smallest angle, with its
+        unwrapped angles (plus the closing one)."""
+        angle = np.arctan2(vertices[loop, 0] - centre[0], vertices[loop, 2] - centre[2])
+        wrap = lambda d: (d + np.pi) % (2 * np.pi) - np.pi  # noqa: E731
+        if wrap(np.diff(np.append(angle, angle[0]))).sum() < 0:
+            loop, angle = loop[::-1], angle[::-1]
+        start = np.argmin(np.mod(angle, 2 * np.pi))
+        loop, angle = np.roll(loop, -start), np.roll(angle, -start)
+        unwrapped = np.mod(angle[0], 2 * np.pi) + np.concatenate([[0.0], np.cumsum(wrap(np.diff(angle)))])
+        return loop, np.append(unwrapped, unwrapped[0] + 2 * np.pi)
+
+    a, ta = ordered(upper_loop)
+    b, tb = ordered(lower_loop)
+    i = j = 0
+    strip = []
+    while i < len(a) or j < len(b):
+        if j >= len(b) or (i < len(a) and ta[i + 1] <= tb[j + 1]):
+            strip.append((a[i], a[(i + 1) % len(a)], b[j % len(b)]))
+            i += 1
+        else:
+            strip.append((a[i % len(a)], b[(j + 1) % len(b)], b[j]))
+            j += 1
+    strip = np.array(strip, np.int64)
+    half = {(int(x), int(y)) for x, y in directed_edges(faces)}
+    s = strip[0]
+    if (int(s[0]), int(s[1])) in half:  # the strip must run against the bodice's boundary half-edge
+        strip = strip[:, ::-1]
+    return np.concatenate([faces, strip])
+
+
+def _base_surface(category: Category, body_vertices, body_faces, lm: Landmarks, edge_length: float):
+    """The garment surface (remeshed) and, for skirts and dresses, the lower-body hull."""
+    hem = category.hem(lm)
+    seed = lm.j("spine2") if category.family in ("top", "dress") else lm.j("pelvis") - [0, 0.08, 0]
+    hull = None
+    if category.family in ("top", "pants"):
+        v, f = _cut(body_vertices, body_faces, _body_cuts(category, lm, hem), seed)
+        return (*remesh(v, f, edge_length), hull)
+    hull = lower_body_hull(body_vertices, lm, edge_length)
+    top = lm.waist_y if category.family == "skirt" else lm.waist_y - 0.03
+    tube = _cut(hull[0], hull[1], [lambda p: above_field(top, p), lambda p: below_field(hem, p)], lm.j("pelvis"))
+    if category.family == "skirt":
+        return (*remesh(*tube, edge_length), hull)
+    bodice = _cut(body_vertices, body_faces, _body_cuts(category, lm, lm.waist_y + 0.03), seed)
+    offset = len(bodice[0])
+    vertices = np.concatenate([bodice[0], tube[0]])
+    faces = np.concatenate([bodice[1], tube[1] + offset])
+    bottom = min(boundary_loops(bodice[1]), key=lambda loop: bodice[0][loop, 1].mean())
+    top_loop = max(boundary_loops(tube[1]), key=lambda loop: tube[0][loop, 1].mean()) + offset
+    faces = _bridge(vertices, faces, bottom, top_loop)
+    # Remesh twice: the first pass evens out the strip, the second projects onto a smooth surface.
+    return (*remesh(*remesh(vertices, faces, edge_length), edge_length), hull)
+
+
+def _insert_seams(vertices, faces, category: Category, lm: Landmarks):
+    """Insert every seam's zero set as mesh edges and name the edges that carry a seam."""
+    fields = seam_fields(category, lm)
+    locked = np.zeros(len(vertices), bool)
+    locked[np.concatenate(boundary_loops(faces))] = True
+    for seam in fields:
+        vertices, faces, values = insert_level_set(vertices, faces, seam.field(vertices), locked=locked)
+        locked = np.concatenate([locked, np.zeros(len(vertices) - len(locked), bool)]) | (values == 0)
+    seams: dict[str, list] = {}
+    for seam in fields:
+        values = seam.field(vertices)
+        scale = np.abs(values).max() + 1e-12
+        edges = np.unique(np.sort(directed_edges(faces), axis=1), axis=0)
+        on = (np.abs(values[edges]) < 1e-9 * scale + 1e-12).all(1)
+        names = seam.name(0.5 * (vertices[edges[on, 0]] + vertices[edges[on, 1]]))
+        for name in np.unique(names):
+            if name:
+                seams.setdefault(str(name), []).append(edges[on][names == name])
+    return vertices, faces, {name: np.concatenate(parts) for name, parts in seams.items()}
+
+
+def _add_ease(vertices, faces, body_vertices, body_faces, ease: float):
+    """Offset along the normals by ``ease``, then push any vertex still closer than ease/2 to the
+    body out to ``ease`` along the body normal at its closest point."""
+    vertices = vertices + ease * vertex_normals(vertices, faces)
+    distance = SurfaceDistance(body_vertices, body_faces)
+    for _ in range(5):
+        signed, closest, normal = distance.query(vertices)
+        close = signed < 0.5 * ease
+        if not close.any():
+            break
+        vertices[close] = closest[close] + ease * normal[close]
+    return vertices
+
+
+def _name_lines(category: Category, vertices: np.ndarray, faces: np.ndarray) -> dict[str, np.ndarray]:
+    loops = boundary_loops(faces)
+    if len(loops) != len(category.line_names):
+        raise RuntimeError(f"{category.id}: expected {len(category.line_names)} boundary loops, got {len(loops)}")
+    centre = {k: vertices[loop].mean(0) for k, loop in enumerate(loops)}
+    remaining = set(centre)
+
+    def take(key):
+        k = max(remaining, key=key)
+        remaining.discard(k)
+        return loops[k]
+
+    lines = {}
+    if category.family in ("top", "dress"):
+        lines["left_cuff"] = take(lambda k: centre[k][0])
+        lines["right_cuff"] = take(lambda k: -centre[k][0])
+        lines["neckline"] = take(lambda k: centre[k][1])
+        lines["hem"] = take(lambda k: -centre[k][1])
+    elif category.family == "pants":
+        lines["waist"] = take(lambda k: centre[k][1])
+        lines["left_hem"] = take(lambda k: centre[k][0])
+        lines["right_hem"] = take(lambda k: -centre[k][0])
+    else:
+        lines["waist"] = take(lambda k: centre[k][1])
+        lines["hem"] = take(lambda k: -centre[k][1])
+    return lines
+
+
+def build_template(category_id: str, body: BodyModel, betas=None, edge_length: float = DEFAULT_EDGE_LENGTH,
+                   ease: float = DEFAULT_EASE) -> Template:
+    """The template of ``category_id`` for ``body`` with shape ``betas`` (canonical frame, metres)."""
+    if category_id not in CATEGORIES:
+        raise DartsInputError(None, f"unknown category '{category_id}' (known: {', '.join(CATEGORIES)})")
+    if not (0.003 <= edge_length <= 0.1):
+        raise DartsInputError(None, f"edge length must be between 0.003 and 0.1 m, got {edge_length}")
+    if not (0.0 <= ease <= 0.05):
+        raise DartsInputError(None, f"ease must be between 0 and 0.05 m, got {ease}")
+    category = CATEGORIES[category_id]
+    shaped, joints = body.shaped(betas)
+    body_vertices, joints = shaped[0].double().detach().numpy(), joints[0].double().detach().numpy()
+    lm = landmarks(body_vertices, joints, body.joint_names)
+    vertices, faces, hull = _base_surface(category, body_vertices, body.faces, lm, edge_length)
+    vertices, faces, seams = _insert_seams(vertices, faces, category, lm)
+    vertices = _add_ease(vertices, faces, body_vertices, body.faces, ease)
+    return Template(category_id, vertices, faces, _name_lines(category, vertices, faces), seams, hull, lm)
