@@ -66,7 +66,10 @@ def add_collar(dart: Dart, width: float = 0.055, edge_length: float = 0.011) -> 
     grid = [base]
     for r in range(1, rows):
         grid.append(_on_garment(dart, base + (r / (rows - 1)) * width * (outward - [0.0, 0.35, 0.0])))
-    _attach(dart, "collar", np.concatenate(grid), _strip_faces(rows, len(ring), closed=True), ring)
+    # The ring follows the garment's boundary half-edges, so the collar runs the other way round:
+    # welded to the neckline it continues the garment's surface with a consistent orientation.
+    faces = _strip_faces(rows, len(ring), closed=True)[:, ::-1]
+    _attach(dart, "collar", np.concatenate(grid), faces, ring)
 
 
 def add_tie(dart: Dart, length: float = 0.42, width: float = 0.07, edge_length: float = 0.011) -> None:

@@ -145,3 +145,17 @@ def parse_seam_setting(text: str) -> tuple[str, str, float | None]:
         if not np.isfinite(value) or value < 0:
             raise DartsInputError(None, f"--seam {text}: stiffness must be a number >= 0")
     return name.strip(), regime, value
+
+
+def welded(dart: Dart) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The garment with every seam pair merged into one vertex (the welded regime applied to all):
+    (vertices [W,3], faces [F,3], welded index of each DART vertex [V])."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    size = len(dart.vertices)
+    graph = coo_matrix((np.ones(len(dart.pairs)), (dart.pairs[:, 0], dart.pairs[:, 1])), shape=(size, size))
+    _, index = connected_components(graph, directed=False)
+    vertices = np.zeros((index.max() + 1, 3), np.float64)
+    vertices[index] = dart.vertices
+    return vertices, index[dart.faces], index

@@ -1,0 +1,193 @@
+"""Garment templates, feature lines, panels and seams, accessories, and the DART file."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from darts.dart.build import make_dart
+from darts.dart.io import dart_arrays, load_dart, save_dart
+from darts.dart.model import REGIMES, welded
+from darts.errors import DartsInputError
+from darts.fileio import read_npz, save_npz
+from darts.geometry.distance import SurfaceDistance
+from darts.geometry.mesh import boundary_loops, edge_manifold
+from darts.templates.categories import CATEGORIES
+
+GARMENTS = Path(__file__).parents[1] / "scenes" / "garments"
+SHIPPED = sorted(p.stem for p in GARMENTS.glob("*.npz"))
+
+
+@pytest.fixture(scope="module")
+def body_distance(body):
+    return SurfaceDistance(body.v_template.double().numpy(), body.faces)
+
+
+@pytest.fixture(scope="module")
+def darts_by_name():
+    return {name: load_dart(GARMENTS / f"{name}.npz") for name in SHIPPED}
+
+
+def test_every_category_is_shipped_and_listed(run_darts):
+    assert set(CATEGORIES) <= set(SHIPPED) and "tshirt-collar-tie" in SHIPPED
+    code, out, _ = run_darts("template", "--list")
+    assert code == 0 and out.split() == list(CATEGORIES)
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_shipped_dart_geometry(name, darts_by_name, body_distance):
+    dart = darts_by_name[name]
+    family = CATEGORIES[dart.category].family
+    vertices, faces, _ = welded(dart)
+    # Edge-manifold as one surface and panel by panel.
+    assert edge_manifold(faces) and edge_manifold(dart.faces)
+    # Every feature line is a closed loop on the welded surface: each vertex has two loop neighbours.
+    _, _, index = welded(dart)
+    for line, loop in dart.lines.items():
+        merged = index[loop]
+        merged = merged[np.r_[True, merged[1:] != merged[:-1]]]
+        if merged[0] == merged[-1]:
+            merged = merged[:-1]
+        assert len(np.unique(merged)) == len(merged) >= 8, line
+    assert sorted(dart.lines) == sorted(CATEGORIES[dart.category].line_names)
+    # The welded boundary is exactly the feature lines; a tie adds its outline, and a collar
+    # closes the neckline while adding its outer edge.
+    loops = boundary_loops(faces)
+    assert len(loops) == len(dart.lines) + ("tie" in dart.accessories)
+    # At rest no vertex is inside the body, seam pairs coincide, there are several panels.
+    signed, _, _ = body_distance.query(dart.vertices)
+    assert signed.min() >= 0.0, f"{(signed < 0).sum()} vertices inside the body"
+    gaps = np.linalg.norm(dart.vertices[dart.pairs[:, 0]] - dart.vertices[dart.pairs[:, 1]], axis=1)
+    assert gaps.max() == 0.0
+    assert len(dart.panel_names) >= 2 and len(np.unique(dart.panel)) == len(dart.panel_names)
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    if family == "skirt":  # one tube around both legs: a connected annulus
+        assert mesh.body_count == 1 and mesh.euler_number == 0
+    if family == "pants":  # two legs joined at the crotch: connected, three openings
+        assert mesh.body_count == 1 and mesh.euler_number == -1
+        assert dart.vertices[dart.lines["left_hem"], 0].min() > 0 > dart.vertices[dart.lines["right_hem"], 0].max()
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_shipped_dart_round_trips_exactly(name, tmp_path):
+    original = read_npz(GARMENTS / f"{name}.npz")
+    save_dart(load_dart(GARMENTS / f"{name}.npz"), tmp_path / "copy.npz")
+    again = read_npz(tmp_path / "copy.npz")
+    assert sorted(original) == sorted(again)
+    for key in original:
+        assert original[key].dtype == again[key].dtype and np.array_equal(original[key], again[key]), key
+
+
+def test_template_is_deterministic_and_sized(body):
+    dart = make_dart("short-sleeve-top", body)
+    shipped = load_dart(GARMENTS / "short-sleeve-top.npz")
+    assert 5000 <= len(dart.vertices) <= 8000
+    assert np.array_equal(dart.vertices, shipped.vertices) and np.array_equal(dart.faces, shipped.faces)
+
+
+def test_edge_length_controls_resolution(body):
+    coarse = make_dart("short-skirt", body, edge_length=0.02)
+    fine = make_dart("short-skirt", body, edge_length=0.012)
+    ratio = len(fine.vertices) / len(coarse.vertices)
+    assert 2.0 < ratio < 3.6  # about (0.02 / 0.012)^2 = 2.8
+    edges = np.linalg.norm(np.diff(coarse.vertices[coarse.faces[:, [0, 1]]], axis=1)[:, 0], axis=1)
+    assert 0.014 < np.median(edges) < 0.026
+
+
+def test_seam_regimes_on_the_command_line(run_darts, tmp_path):
+    out = tmp_path / "g.npz"
+    code, _, err = run_darts("template", "short-skirt", "-o", out, "--seam", "all=repulsive", "--seam", "left_side=partial",
+                             "--seam", "waistband=loose:5")
+    assert code == 0, err
+    dart = load_dart(out)
+    seams = {s.name: s for s in dart.seams}
+    assert seams["right_side"].regime == "repulsive" and seams["right_side"].rest_length > 0
+    assert seams["waistband"].regime == "loose" and seams["waistband"].stiffness == 5.0
+    partial = dart.pair_seam == dart.seam_names.index("left_side")
+    active = dart.pair_active[partial]
+    assert 0 < active.sum() < len(active)  # springs only on part of the seam
+    assert np.all(dart.pair_position[partial][active] <= 0.5)
+    assert set(REGIMES) >= {s.regime for s in dart.seams}
+
+
+def test_accessories_are_stitched_to_the_neckline(darts_by_name, body_distance):
+    dart = darts_by_name["tshirt-collar-tie"]
+    assert dart.accessories == ["collar", "tie"] and {"collar", "tie"} <= set(dart.panel_names)
+    for name in ("collar", "tie"):
+        mine = dart.pair_seam == dart.seam_names.index(name)
+        assert mine.any()
+        garment_end, accessory_end = dart.pairs[mine].T
+        assert np.isin(garment_end, dart.lines["neckline"]).all()
+        panel = dart.panel_names.index(name)
+        assert np.isin(accessory_end, dart.faces[dart.panel == panel]).all()
+    signed, _, _ = body_distance.query(dart.vertices)
+    assert signed.min() >= 0.0
+
+
+def test_inspect_reports_and_draws(run_darts, tmp_path):
+    code, out, _ = run_darts("inspect", GARMENTS / "long-pants.npz", "--json", "--png", tmp_path / "p.png")
+    info = json.loads(out)
+    assert code == 0 and info["category"] == "long-pants" and len(info["panels"]) >= 4
+    assert {"left_inseam", "right_outseam", "waistband"} <= set(info["seams"])
+    assert all(line["length_m"] > 0.2 for line in info["lines"].values())
+    image = (tmp_path / "p.png").read_bytes()
+    assert image[:8] == b"\x89PNG\r\n\x1a\n" and len(image) > 10_000
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".ply", ".glb"])
+def test_export_mesh_with_panel_colours(run_darts, tmp_path, suffix):
+    out = tmp_path / f"skirt{suffix}"
+    code, _, err = run_darts("export", GARMENTS / "short-skirt.npz", "-o", out)
+    assert code == 0, err
+    mesh = trimesh.load(out, force="mesh", process=False)
+    dart = load_dart(GARMENTS / "short-skirt.npz")
+    assert len(mesh.faces) == len(dart.faces)
+    colours = np.unique(np.asarray(mesh.visual.vertex_colors)[:, :3], axis=0)
+    assert len(colours) == len(dart.panel_names)
+
+
+def _broken(tmp_path, edit):
+    arrays = dart_arrays(load_dart(GARMENTS / "short-skirt.npz"))
+    edit(arrays)
+    path = tmp_path / "broken.npz"
+    save_npz(path, **arrays)
+    return path
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda a: a.pop("seam_regimes"), "missing key"),
+    (lambda a: a.update(vertices=a["vertices"][:, :2]), "'vertices' has shape"),
+    (lambda a: a["vertices"].__setitem__((0, 0), np.nan), "NaN"),
+    (lambda a: a.update(faces=a["faces"] + 100000), "indices outside"),
+    (lambda a: a.update(category=np.array("poncho")), "unknown category"),
+    (lambda a: a["seam_regimes"].__setitem__(0, "glued"), "unknown regime"),
+    (lambda a: a["seam_stiffness"].__setitem__(0, -1.0), "stiffness must be >= 0"),
+    (lambda a: a.update(format=np.array("dart/99")), "not supported"),
+    (lambda a: a.update(line_vertices=a["line_vertices"][::-1].copy()), "closed edge loop"),
+])
+def test_corrupt_darts_give_one_clear_line(tmp_path, run_darts, edit, message):
+    path = _broken(tmp_path, edit)
+    with pytest.raises(DartsInputError, match=message):
+        load_dart(path)
+    code, out, err = run_darts("inspect", path, "--png", tmp_path / "x.png")
+    assert code == 2 and err.count("\n") == 1 and str(path) in err and message in err
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["poncho"], "unknown category"),
+    (["short-skirt", "--seam", "nothing=stiff"], "unknown seam"),
+    (["short-skirt", "--seam", "left_side=glued"], "unknown regime"),
+    (["short-skirt", "--seam", "left_side=stiff:-5"], ">= 0"),
+    (["short-skirt", "--seam", "left_side"], "NAME=REGIME"),
+    (["short-skirt", "--edge-length", "0"], "edge length"),
+    (["short-skirt", "--accessory", "collar"], "needs a neckline"),
+])
+def test_bad_template_requests_exit_2_without_output(tmp_path, run_darts, args, message):
+    out = tmp_path / "g.npz"
+    code, _, err = run_darts("template", *args, "-o", out)
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert not out.exists()
