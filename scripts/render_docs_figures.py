@@ -1,4 +1,4 @@
-"""Render the figures of docs/body.md and docs/motions.md (needs matplotlib: pip install matplotlib).
+"""Render the figures of docs/body.md, docs/motions.md and docs/templates.md.
 
 Flat-shaded meshes drawn with the painter's algorithm, orthographic views.
 """
@@ -61,6 +61,27 @@ def motions_figure(out: Path, names: list[str], frames_per_motion: int = 5) -> N
     plt.close(fig)
 
 
+def garments_figure(out: Path) -> None:
+    """Every shipped DART, front and back, panels coloured."""
+    from darts.dart.export import panel_colors
+    from darts.dart.io import load_dart
+    from darts.render import BACK, FRONT
+
+    paths = sorted((Path(__file__).parents[1] / "scenes" / "garments").glob("*.npz"))
+    fig, axes = plt.subplots(2, len(paths), figsize=(2.2 * len(paths), 4.6))
+    for col, path in enumerate(paths):
+        dart = load_dart(path)
+        colors = panel_colors(len(dart.panel_names))[dart.panel]
+        for row, view in enumerate((FRONT, BACK)):
+            draw_mesh(axes[row, col], dart.vertices.astype(float), dart.faces, colors, *view, two_sided=True)
+            axes[row, col].set_xlim(-0.95, 0.95)  # one scale for every garment (canonical metres)
+            axes[row, col].set_ylim(-1.15, 0.6)
+        axes[0, col].set_title(path.stem, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=60)
+    plt.close(fig)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output-dir", default="docs/images")
@@ -69,7 +90,8 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     body_figure(out / "default_body.png")
     motions_figure(out / "motions.png", ["walk", "run", "wave", "jumping_jacks", "twist", "squat"])
-    print(f"wrote {out}/default_body.png and {out}/motions.png")
+    garments_figure(out / "garments.png")
+    print(f"wrote {out}/default_body.png, motions.png and garments.png")
 
 
 if __name__ == "__main__":

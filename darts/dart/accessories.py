@@ -8,7 +8,6 @@ import numpy as np
 
 from darts.dart.model import Dart, Seam
 from darts.errors import DartsInputError
-from darts.geometry.distance import SurfaceDistance
 
 LIFT = 0.004  # metres between an accessory and the garment under it
 ACCESSORIES = ("collar", "tie")
@@ -27,6 +26,8 @@ def _strip_faces(rows: int, columns: int, closed: bool) -> np.ndarray:
 
 def _on_garment(dart: Dart, points: np.ndarray) -> np.ndarray:
     """Project points onto the garment and lift them off it along its normal (outwards)."""
+    from darts.geometry.distance import SurfaceDistance  # starts Warp only when needed
+
     _, closest, normal = SurfaceDistance(dart.vertices, dart.faces).query(points)
     outward = np.sign(np.einsum("ij,ij->i", normal, closest - dart.vertices.mean(0)))[:, None]
     return closest + LIFT * outward * normal

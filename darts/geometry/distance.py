@@ -5,9 +5,10 @@ Sign convention: positive outside, negative inside (by the winding number, robus
 from __future__ import annotations
 
 import numpy as np
-import warp as wp
 
-wp.config.quiet = True
+from darts.geometry.warp_runtime import warp
+
+wp = warp()
 
 
 @wp.kernel
@@ -31,7 +32,6 @@ class SurfaceDistance:
     """Signed distances and closest points to a fixed closed mesh (Warp CPU backend)."""
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, device: str = "cpu"):
-        wp.init()
         self.device = device
         self._points = wp.array(np.ascontiguousarray(vertices, np.float32), dtype=wp.vec3, device=device)
         self._faces = wp.array(np.ascontiguousarray(faces, np.int32).reshape(-1), dtype=wp.int32, device=device)

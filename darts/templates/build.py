@@ -16,7 +16,6 @@ from scipy.sparse.csgraph import connected_components
 
 from darts.body.model import BodyModel
 from darts.errors import DartsInputError
-from darts.geometry.distance import SurfaceDistance
 from darts.geometry.levelset import compact, insert_level_set, keep_side
 from darts.geometry.mesh import boundary_loops, directed_edges, vertex_normals
 from darts.geometry.remesh import remesh
@@ -163,6 +162,8 @@ def _insert_seams(vertices, faces, category: Category, lm: Landmarks):
 def _add_ease(vertices, faces, body_vertices, body_faces, ease: float):
     """Offset along the normals by ``ease``, then push any vertex still closer than ease/2 to the
     body out to ``ease`` along the body normal at its closest point."""
+    from darts.geometry.distance import SurfaceDistance  # starts Warp only when needed
+
     vertices = vertices + ease * vertex_normals(vertices, faces)
     distance = SurfaceDistance(body_vertices, body_faces)
     for _ in range(5):
