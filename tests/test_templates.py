@@ -191,3 +191,19 @@ def test_bad_template_requests_exit_2_without_output(tmp_path, run_darts, args, 
     code, _, err = run_darts("template", *args, "-o", out)
     assert code == 2 and message in err and err.count("\n") == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize("category, betas", [
+    ("sleeveless-dress", [-2.0, 1.5, -1.0]),  # the dress bridge once came out mis-oriented here
+    ("short-sleeve-dress", [2.0, -1.0, 1.0]),
+    ("long-pants", [-2.0, 1.5, -1.0]),
+    ("long-skirt", [2.0, -1.0, 1.0]),
+])
+def test_templates_fit_other_body_shapes(body, category, betas):
+    dart = make_dart(category, body, betas=betas)
+    shaped, _ = body.shaped(np.array(betas, np.float32))
+    signed, _, _ = SurfaceDistance(shaped[0].double().numpy(), body.faces).query(dart.vertices)
+    assert signed.min() >= 0.0
+    _, faces, _ = welded(dart)
+    assert edge_manifold(faces) and len(boundary_loops(faces)) == len(dart.lines)
+    assert np.allclose(dart.body_betas, betas)

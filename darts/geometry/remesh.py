@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from darts.geometry.mesh import boundary_edges
+from darts.geometry.mesh import boundary_edges, edge_manifold
 
 
 def remesh(vertices: np.ndarray, faces: np.ndarray, edge_length: float, feature_edges: np.ndarray | None = None,
@@ -12,6 +12,8 @@ def remesh(vertices: np.ndarray, faces: np.ndarray, edge_length: float, feature_
     edges (and ``feature_edges`` [E,2]) are resampled along themselves: the outline is kept."""
     import gpytoolbox
 
+    if not edge_manifold(faces):  # the remesher aborts the process on such input
+        raise RuntimeError("remesh: the input mesh is not edge-manifold and consistently oriented")
     features = boundary_edges(faces)
     if feature_edges is not None and len(feature_edges):
         features = np.concatenate([features, feature_edges])

@@ -108,9 +108,8 @@ def _bridge(vertices, faces, upper_loop, lower_loop):
             j += 1
     strip = np.array(strip, np.int64)
     half = {(int(x), int(y)) for x, y in directed_edges(faces)}
-    s = strip[0]
-    if (int(s[0]), int(s[1])) in half:  # the strip must run against the bodice's boundary half-edge
-        strip = strip[:, ::-1]
+    if any((int(x), int(y)) in half for x, y in directed_edges(strip)):
+        strip = strip[:, ::-1]  # the strip must run against the loops' boundary half-edges
     return np.concatenate([faces, strip])
 
 
