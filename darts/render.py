@@ -1,11 +1,12 @@
-"""Flat-shaded pictures of meshes with matplotlib (painter's algorithm, orthographic views)."""
+"""Flat-shaded pictures of meshes with matplotlib (painter's algorithm, orthographic views).
+
+Draws on matplotlib Axes; callers make figures with ``matplotlib.figure.Figure`` so the package
+never changes the user's pyplot backend.
+"""
 from __future__ import annotations
 
-import matplotlib
-
-matplotlib.use("Agg")
-import numpy as np  # noqa: E402
-from matplotlib.collections import PolyCollection  # noqa: E402
+import numpy as np
+from matplotlib.collections import PolyCollection
 
 FRONT = (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))  # canonical frame: look along -Z
 SIDE = (np.array([0, 0, 1.0]), np.array([0, 1.0, 0]))  # look along -X, front +Z to the right

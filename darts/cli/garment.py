@@ -58,25 +58,26 @@ def summary(dart: Dart) -> dict:
 
 def render_png(dart: Dart, path) -> None:
     """Front and back views, panels coloured, seam pairs drawn as dots."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
 
     from darts.render import BACK, FRONT, draw_mesh
 
     colors = panel_colors(len(dart.panel_names))[dart.panel]
     vertices = dart.vertices.astype(np.float64)
     normals = vertex_normals(vertices, dart.faces.astype(np.int64))
-    fig, axes = plt.subplots(1, 2, figsize=(10, 6))
+    fig = Figure(figsize=(10, 6))
+    axes = fig.subplots(1, 2)
     for ax, (right, up), title in zip(axes, (FRONT, BACK), ("front", "back")):
         draw_mesh(ax, vertices, dart.faces, colors, right, up, two_sided=True)
         ends = dart.pairs[:, 0]
         visible = normals[ends] @ np.cross(right, up) > 0
         ax.scatter(vertices[ends[visible]] @ right, vertices[ends[visible]] @ up, s=2, c="k")
         ax.set_title(f"{dart.category} ({title})")
-    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in panel_colors(len(dart.panel_names))]
+    handles = [Rectangle((0, 0), 1, 1, color=c) for c in panel_colors(len(dart.panel_names))]
     fig.legend(handles, dart.panel_names, loc="lower center", ncol=min(len(handles), 6), fontsize=8, frameon=False)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=90, bbox_inches="tight", format="png")
-    plt.close(fig)
 
 
 def inspect(args) -> int:
