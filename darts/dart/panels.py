@@ -37,7 +37,7 @@ def _edge_table(faces: np.ndarray):
     k = np.tile(np.arange(3), len(faces))
     a, b = faces[f, k], faces[f, (k + 1) % 3]
     key = np.minimum(a, b).astype(np.int64) * (faces.max() + 1) + np.maximum(a, b)
-    return key, f, 3 * f + k, 3 * f + (k + 1) % 3, a
+    return key, f, 3 * f + k, 3 * f + (k + 1) % 3
 
 
 def _arc_positions(vertices: np.ndarray, edges: np.ndarray) -> dict[int, float]:
@@ -64,7 +64,7 @@ def _arc_positions(vertices: np.ndarray, edges: np.ndarray) -> dict[int, float]:
 
 def split_panels(vertices: np.ndarray, faces: np.ndarray, seam_edges: list[np.ndarray]) -> PanelSplit:
     """Cut the mesh along ``seam_edges`` (one [E,2] array per seam, template indices)."""
-    key, face, start, end, origin = _edge_table(faces)
+    key, face, start, end = _edge_table(faces)
     size = faces.max() + 1
     seam_keys = [np.minimum(e[:, 0], e[:, 1]).astype(np.int64) * size + np.maximum(e[:, 0], e[:, 1]) for e in seam_edges]
     is_seam = np.isin(key, np.concatenate(seam_keys)) if seam_keys else np.zeros(len(key), bool)
