@@ -1,0 +1,71 @@
+"""The animated body a garment is simulated on, in the AMASS world frame (Z up, metres).
+
+Timeline: during ``settle`` seconds the body goes from its rest pose (placed by the first frame's
+root rotation and translation) to the motion's first frame, every joint slerped from identity;
+then the recorded frames follow. ``positions(t)`` interpolates linearly between frames, which is
+what the solver samples at every substep.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from darts.body.lbs import axis_angle_to_matrix
+from darts.body.model import BodyModel
+from darts.motion.amass import Motion
+from darts.motion.posing import motion_betas, pose_sequence
+from darts.motion.resample import resample
+
+
+@dataclass
+class BodyTrack:
+    """Body vertices per frame [T,V,3] at ``fps``; the first ``settle_frames`` are the settle blend."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    fps: float
+    settle_frames: int
+    rest_rotation: np.ndarray  # root rotation (3x3) of the rest placement
+    rest_origin: np.ndarray  # pelvis joint of the rest shape (canonical frame)
+    rest_translation: np.ndarray  # world position of that pelvis joint at t = 0
+
+    @property
+    def duration(self) -> float:
+        return (len(self.vertices) - 1) / self.fps
+
+    def positions(self, time: float) -> np.ndarray:
+        """Body vertices at ``time`` seconds (clamped to the track), linear between frames."""
+        x = float(np.clip(time * self.fps, 0.0, len(self.vertices) - 1))
+        lo = min(int(np.floor(x)), len(self.vertices) - 1)
+        hi = min(lo + 1, len(self.vertices) - 1)
+        w = x - lo
+        return (1.0 - w) * self.vertices[lo] + w * self.vertices[hi]
+
+    def place_rest(self, canonical: np.ndarray) -> np.ndarray:
+        """Canonical rest-pose points (a DART's vertices) moved exactly as the body is at t = 0."""
+        return (np.asarray(canonical, np.float64) - self.rest_origin) @ self.rest_rotation.T + self.rest_translation
+
+
+def build_body_track(body: BodyModel, motion: Motion, fps: float, settle: float, betas=None,
+                     progress: bool = False) -> BodyTrack:
+    """Pose ``body`` by ``motion`` resampled to ``fps``, preceded by ``settle`` seconds of blend."""
+    if settle < 0:
+        raise ValueError(f"settle must be >= 0 s, got {settle}")
+    motion = resample(motion, fps) if abs(motion.fps - fps) > 1e-9 else motion
+    count = int(round(settle * fps))
+    if count:
+        weights = (np.arange(count) / count)[:, None, None]
+        blend = {name: arr[:1] * weights for name, arr in motion.parts().items()}
+        blend["body_pose"][:, 0] = motion.body_pose[0, 0]  # the root keeps its first-frame rotation
+        blended = motion.with_frames(trans=np.repeat(motion.trans[:1], count, 0), **blend)
+        joined = {name: np.concatenate([getattr(blended, name), arr]) for name, arr in motion.parts().items()}
+        motion = motion.with_frames(trans=np.concatenate([blended.trans, motion.trans]), **joined)
+    vertices, _ = pose_sequence(body, motion, betas=betas, progress=progress)
+    shape = torch.as_tensor(motion_betas(body, motion, betas), dtype=body.dtype)
+    _, rest_joints = body.shaped(shape)
+    origin = rest_joints[0, 0].double().numpy()
+    # In the rest pose every joint moves with the root: x -> R (x - J_0) + J_0 + trans.
+    rotation = axis_angle_to_matrix(torch.as_tensor(motion.body_pose[0, 0], dtype=torch.float64)).numpy()
+    return BodyTrack(vertices, body.faces, float(fps), count, rotation, origin, origin + motion.trans[0])
