@@ -1,0 +1,59 @@
+"""The solver's cloth model built from a DART: particles, masses, constraints per seam regime."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from darts.dart.io import load_dart
+from sim.model import cloth_model, dihedral_angles
+
+GARMENTS = Path(__file__).parents[1] / "scenes" / "garments"
+
+
+@pytest.fixture
+def skirt():
+    return load_dart(GARMENTS / "short-skirt.npz")
+
+
+def test_stiff_seams_keep_every_vertex_and_spring_every_pair(skirt):
+    model = cloth_model(skirt)
+    assert len(model.rest) == len(skirt.vertices) and len(model.springs) == len(skirt.pairs)
+    assert np.allclose(model.spring_stiffness, 2000.0) and np.all(model.spring_rest == 0)
+    tri = skirt.vertices[skirt.faces].astype(np.float64)
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+    assert np.isclose(model.mass.sum(), skirt.material["density"] * area) and model.mass.min() > 0
+    assert model.edge_rest.min() > 0 and 0.008 < np.median(model.edge_rest) < 0.014
+    # A smooth garment: rest dihedral angles are small.
+    assert np.median(np.abs(model.hinge_rest_angle)) < 0.1
+
+
+def test_welded_seams_merge_their_ends_into_one_particle(skirt):
+    skirt.set_seam("all", "welded")
+    model = cloth_model(skirt)
+    merged = len(np.unique(skirt.pairs.reshape(-1))) - len(np.unique(model.particle_of_vertex[skirt.pairs.reshape(-1)]))
+    assert len(model.rest) == len(skirt.vertices) - merged and len(model.springs) == 0
+    assert np.all(model.particle_of_vertex[skirt.pairs[:, 0]] == model.particle_of_vertex[skirt.pairs[:, 1]])
+    assert all(len(set(f)) == 3 for f in model.faces)  # no triangle collapsed
+    # Welded panels share edges: the hinges now cross the seams.
+    assert len(model.hinges) > len(cloth_model(load_dart(GARMENTS / "short-skirt.npz")).hinges)
+
+
+def test_partial_and_repulsive_regimes(skirt):
+    skirt.set_seam("left_side", "partial")
+    skirt.set_seam("right_side", "repulsive", 150.0)
+    model = cloth_model(skirt)
+    left, right = skirt.seam_names.index("left_side"), skirt.seam_names.index("right_side")
+    assert (model.spring_seam == left).sum() == skirt.pair_active[skirt.pair_seam == left].sum() < (skirt.pair_seam == left).sum()
+    assert np.all(model.spring_rest[model.spring_seam == right] == 0.02)
+    assert np.all(model.spring_stiffness[model.spring_seam == right] == 150.0)
+
+
+def test_dihedral_angle_of_a_right_angle_fold():
+    points = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, 0, 1.0]])
+    hinge = np.array([[0, 1, 2, 3]])
+    assert np.isclose(abs(dihedral_angles(points, hinge)[0]), np.pi / 2)
+    flat = points.copy()
+    flat[3] = [0.5, -1, 0]
+    assert np.isclose(dihedral_angles(flat, hinge)[0], 0.0)
