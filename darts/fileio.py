@@ -46,17 +46,24 @@ def check_npz_file(path: Path) -> None:
         raise DartsInputError(path, "not a valid .npz archive (not a zip file)")
 
 
-def read_npz(path: str | os.PathLike, allow_pickle: bool = False) -> dict[str, np.ndarray]:
-    """All arrays of an ``.npz`` archive, or a DartsInputError naming the file and what is wrong."""
+def read_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
+    """The arrays of an ``.npz`` archive, or a DartsInputError naming the file and what is wrong.
+
+    Entries that would need pickle (metadata dicts in official SMPL-X files, marker lists in some
+    AMASS releases) are skipped, never unpickled."""
     path = Path(path)
     check_npz_file(path)
     try:
-        with np.load(path, allow_pickle=allow_pickle) as archive:
-            return {key: archive[key] for key in archive.files}
-    except (zipfile.BadZipFile, EOFError, OSError) as exc:
+        with np.load(path, allow_pickle=False) as archive:
+            out = {}
+            for key in archive.files:
+                try:
+                    out[key] = archive[key]
+                except ValueError:
+                    continue
+            return out
+    except (zipfile.BadZipFile, EOFError, OSError, ValueError) as exc:
         raise DartsInputError(path, f"not a valid .npz archive ({exc})") from None
-    except ValueError as exc:
-        raise DartsInputError(path, f"not a plain numeric .npz archive ({exc})") from None
 
 
 def require_keys(arrays: dict, keys, source) -> None:

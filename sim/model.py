@@ -13,10 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
-from darts.dart.model import Dart
+from darts.dart.model import Dart, merged_index
 
 
 @dataclass
@@ -37,16 +35,6 @@ class ClothModel:
     spring_seam: np.ndarray  # [S] index into seam_names
     seam_names: list[str]
     material: dict
-
-
-def _merge_welded(dart: Dart) -> np.ndarray:
-    """Particle index of each DART vertex, merging the ends of welded seam pairs."""
-    welded_seams = [i for i, s in enumerate(dart.seams) if s.regime == "welded"]
-    pairs = dart.pairs[np.isin(dart.pair_seam, welded_seams)]
-    size = len(dart.vertices)
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(size, size))
-    _, labels = connected_components(graph, directed=False)
-    return labels
 
 
 def dihedral_angles(points: np.ndarray, hinges: np.ndarray) -> np.ndarray:
@@ -75,7 +63,8 @@ def _hinges(faces: np.ndarray) -> np.ndarray:
 
 def cloth_model(dart: Dart) -> ClothModel:
     """The solver's model of ``dart`` (rest state in the canonical frame)."""
-    particle = _merge_welded(dart)
+    welded_seams = [i for i, s in enumerate(dart.seams) if s.regime == "welded"]
+    particle = merged_index(dart, dart.pairs[np.isin(dart.pair_seam, welded_seams)])
     count = particle.max() + 1
     rest = np.zeros((count, 3))
     rest[particle] = dart.vertices
@@ -86,7 +75,7 @@ def cloth_model(dart: Dart) -> ClothModel:
     np.add.at(mass, faces.reshape(-1), np.repeat(area / 3.0 * dart.material["density"], 3))
     edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
     hinges = _hinges(faces)
-    sprung = dart.pair_active & ~np.isin(dart.pair_seam, [i for i, s in enumerate(dart.seams) if s.regime == "welded"])
+    sprung = dart.pair_active & ~np.isin(dart.pair_seam, welded_seams)
     seam_of = dart.pair_seam[sprung]
     return ClothModel(
         rest=rest, particle_of_vertex=particle, faces=faces, mass=mass, edges=edges,

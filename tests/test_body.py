@@ -168,6 +168,8 @@ def _smplx_like(body) -> dict:
         "v_template": body.v_template.double().numpy(), "shapedirs": body.shapedirs.double().numpy(),
         "posedirs": np.zeros((body.num_vertices, 3, 54 * 9)), "J_regressor": regressor, "weights": weights,
         "kintree_table": np.stack([parents, np.arange(55)]), "f": body.faces,
+        # Official SMPL-X .npz files also hold pickled dicts; they must be skipped, not unpickled.
+        "joint2num": np.array({"pelvis": 0}, dtype=object), "part2num": np.array({"body": 0}, dtype=object),
     }
 
 

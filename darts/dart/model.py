@@ -147,15 +147,20 @@ def parse_seam_setting(text: str) -> tuple[str, str, float | None]:
     return name.strip(), regime, value
 
 
-def welded(dart: Dart) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The garment with every seam pair merged into one vertex (the welded regime applied to all):
-    (vertices [W,3], faces [F,3], welded index of each DART vertex [V])."""
+def merged_index(dart: Dart, pairs: np.ndarray) -> np.ndarray:
+    """New index of each DART vertex when the two ends of every pair in ``pairs`` [K,2] become one."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
     size = len(dart.vertices)
-    graph = coo_matrix((np.ones(len(dart.pairs)), (dart.pairs[:, 0], dart.pairs[:, 1])), shape=(size, size))
-    _, index = connected_components(graph, directed=False)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(size, size))
+    return connected_components(graph, directed=False)[1]
+
+
+def welded(dart: Dart) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The garment with every seam pair merged into one vertex (the welded regime applied to all):
+    (vertices [W,3], faces [F,3], welded index of each DART vertex [V])."""
+    index = merged_index(dart, dart.pairs)
     vertices = np.zeros((index.max() + 1, 3), np.float64)
     vertices[index] = dart.vertices
     return vertices, index[dart.faces], index

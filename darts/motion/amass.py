@@ -8,14 +8,13 @@ world frame (Z up, metres); other joints are local rotations in SMPL's canonical
 from __future__ import annotations
 
 import os
-import zipfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from darts.errors import DartsInputError
-from darts.fileio import check_npz_file, require_finite, save_npz
+from darts.fileio import read_npz, require_finite, save_npz
 
 NUM_BODY_JOINTS = 22  # the root plus 21 body joints, common to SMPL, SMPL-H and SMPL-X
 NUM_HAND_JOINTS = 30  # 15 per hand, left then right (MANO order)
@@ -73,22 +72,6 @@ class Motion:
         return np.concatenate([self.body_pose] + extra, axis=1)
 
 
-def _read_keys(path: Path) -> dict[str, np.ndarray]:
-    """Read the arrays of an AMASS .npz, skipping ones that need pickle (markers, metadata)."""
-    check_npz_file(path)
-    try:
-        with np.load(path, allow_pickle=False) as archive:
-            out = {}
-            for key in archive.files:
-                try:
-                    out[key] = archive[key]
-                except ValueError:
-                    continue
-            return out
-    except (zipfile.BadZipFile, EOFError, OSError, ValueError) as exc:
-        raise DartsInputError(path, f"not a valid .npz archive ({exc})") from None
-
-
 def _frames(arrays: dict, key: str, width: int, frames: int | None, path) -> np.ndarray:
     value = np.asarray(arrays[key])
     if value.dtype.kind not in "fiu":
@@ -132,7 +115,7 @@ def _gender(arrays: dict) -> str:
 def load_motion(path: str | os.PathLike) -> Motion:
     """Load and validate an AMASS-format ``.npz``; any problem raises DartsInputError naming the file."""
     path = Path(path)
-    arrays = _read_keys(path)
+    arrays = read_npz(path)
     if "trans" not in arrays:
         raise DartsInputError(path, "missing key 'trans' (not an AMASS motion file)")
     trans = _frames(arrays, "trans", 3, None, path)
