@@ -41,7 +41,7 @@ class Template:
     landmarks: Landmarks | None = field(default=None, repr=False)
 
 
-def _largest_component(vertices, faces, seed: np.ndarray):
+def _component_near(vertices, faces, seed: np.ndarray):
     """Keep the connected component nearest to ``seed``."""
     edges = directed_edges(faces)
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(vertices),) * 2)
@@ -54,7 +54,7 @@ def _largest_component(vertices, faces, seed: np.ndarray):
 def _cut(vertices, faces, fields, seed):
     for fn in fields:
         vertices, faces, _ = keep_side(vertices, faces, fn(vertices))
-        vertices, faces = _largest_component(vertices, faces, seed)
+        vertices, faces = _component_near(vertices, faces, seed)
     return vertices, faces
 
 
