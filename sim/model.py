@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from darts.dart.model import Dart, merged_index
+from darts.geometry.mesh import half_edges, interior_edge_halves
 
 
 @dataclass
@@ -51,13 +52,9 @@ def dihedral_angles(points: np.ndarray, hinges: np.ndarray) -> np.ndarray:
 
 def _hinges(faces: np.ndarray) -> np.ndarray:
     """(i, j, k, l) for each edge shared by two faces: (i, j) the edge, k and l the opposite corners."""
-    corner = np.repeat(np.arange(len(faces)), 3)
-    k = np.tile(np.arange(3), len(faces))
-    a, b, opposite = faces[corner, k], faces[corner, (k + 1) % 3], faces[corner, (k + 2) % 3]
-    key = np.minimum(a, b).astype(np.int64) * (faces.max() + 1) + np.maximum(a, b)
-    order = np.argsort(key, kind="stable")
-    same = np.where(key[order][1:] == key[order][:-1])[0]
-    first, second = order[same], order[same + 1]
+    a, b, key = half_edges(faces)
+    opposite = np.roll(faces, -2, axis=1).reshape(-1)
+    first, second = interior_edge_halves(key)
     return np.stack([a[first], b[first], opposite[first], opposite[second]], 1)
 
 

@@ -12,6 +12,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from darts.geometry.mesh import half_edges, interior_edge_halves
+
 
 @dataclass
 class PanelSplit:
@@ -29,15 +31,6 @@ class PanelSplit:
     def map_loop(self, template_faces: np.ndarray, loop: np.ndarray) -> np.ndarray:
         """A template boundary loop in new indices, through both copies where it crosses a seam."""
         return _map_loop(self.faces, template_faces, loop)
-
-
-def _edge_table(faces: np.ndarray):
-    """For every half-edge: (key of its undirected edge, face, corner of its start, corner of its end)."""
-    f = np.repeat(np.arange(len(faces)), 3)
-    k = np.tile(np.arange(3), len(faces))
-    a, b = faces[f, k], faces[f, (k + 1) % 3]
-    key = np.minimum(a, b).astype(np.int64) * (faces.max() + 1) + np.maximum(a, b)
-    return key, f, 3 * f + k, 3 * f + (k + 1) % 3
 
 
 def _arc_positions(vertices: np.ndarray, edges: np.ndarray) -> dict[int, float]:
@@ -64,14 +57,13 @@ def _arc_positions(vertices: np.ndarray, edges: np.ndarray) -> dict[int, float]:
 
 def split_panels(vertices: np.ndarray, faces: np.ndarray, seam_edges: list[np.ndarray]) -> PanelSplit:
     """Cut the mesh along ``seam_edges`` (one [E,2] array per seam, template indices)."""
-    key, face, start, end = _edge_table(faces)
+    _, _, key = half_edges(faces)
+    half = np.arange(len(key))
+    face, start, end = half // 3, half, 3 * (half // 3) + (half % 3 + 1) % 3  # corners of each half-edge
     size = faces.max() + 1
     seam_keys = [np.minimum(e[:, 0], e[:, 1]).astype(np.int64) * size + np.maximum(e[:, 0], e[:, 1]) for e in seam_edges]
     is_seam = np.isin(key, np.concatenate(seam_keys)) if seam_keys else np.zeros(len(key), bool)
-    order = np.argsort(key, kind="stable")
-    sk = key[order]
-    pair = np.where(sk[1:] == sk[:-1])[0]
-    h1, h2 = order[pair], order[pair + 1]  # the two half-edges of each interior edge
+    h1, h2 = interior_edge_halves(key)
     glue = ~is_seam[h1]
     h1, h2 = h1[glue], h2[glue]
     # Opposite half-edges run in opposite directions: start of one meets the end of the other.
@@ -88,7 +80,7 @@ def split_panels(vertices: np.ndarray, faces: np.ndarray, seam_edges: list[np.nd
 
     pairs, pair_seam, pair_position = [], [], []
     for index, keys in enumerate(seam_keys):
-        halves = order[np.isin(sk, keys)]
+        halves = np.where(np.isin(key, keys))[0]
         positions = _arc_positions(vertices, seam_edges[index])
         found = {}
         h_sorted = halves[np.argsort(key[halves], kind="stable")]

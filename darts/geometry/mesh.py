@@ -9,6 +9,21 @@ def directed_edges(faces: np.ndarray) -> np.ndarray:
     return np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
 
 
+def half_edges(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Face-major half-edges: h = 3f + k runs from faces[f, k] to faces[f, (k + 1) % 3].
+    Returns (start vertex [3F], end vertex [3F], key of the undirected edge [3F])."""
+    start, end = faces.reshape(-1), np.roll(faces, -1, axis=1).reshape(-1)
+    key = np.minimum(start, end).astype(np.int64) * (int(faces.max()) + 1) + np.maximum(start, end)
+    return start, end, key
+
+
+def interior_edge_halves(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two half-edges (h1, h2) of every edge shared by two faces, given the keys of half_edges."""
+    order = np.argsort(key, kind="stable")
+    same = np.where(key[order][1:] == key[order][:-1])[0]
+    return order[same], order[same + 1]
+
+
 def boundary_edges(faces: np.ndarray) -> np.ndarray:
     """Half-edges with no opposite half-edge: the mesh boundary, oriented with the faces."""
     half = directed_edges(faces)
