@@ -14,7 +14,7 @@ from darts.dart.io import load_dart, save_dart
 from darts.dart.model import MATERIALS, Dart, parse_seam_setting
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path
-from darts.geometry.mesh import vertex_normals
+from darts.geometry.mesh import loop_length, vertex_normals
 from darts.templates.build import DEFAULT_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
 
@@ -38,10 +38,6 @@ def template(args) -> int:
 
 def summary(dart: Dart) -> dict:
     """Counts, panels, seams with regimes, feature lines with lengths (metres)."""
-    def length(loop):
-        pts = dart.vertices[loop].astype(np.float64)
-        return float(np.linalg.norm(pts - np.roll(pts, -1, axis=0), axis=1).sum())
-
     counts = np.bincount(dart.pair_seam, minlength=len(dart.seams))
     active = np.bincount(dart.pair_seam, weights=dart.pair_active, minlength=len(dart.seams))
     gaps = dart.seam_gaps()
@@ -52,7 +48,8 @@ def summary(dart: Dart) -> dict:
         "seams": {s.name: {"regime": s.regime, "stiffness": s.stiffness, "rest_length": s.rest_length,
                            "pairs": int(counts[i]), "active_pairs": int(active[i]), "max_gap": gaps[s.name]["max"]}
                   for i, s in enumerate(dart.seams)},
-        "lines": {name: {"vertices": len(loop), "length_m": round(length(loop), 4)} for name, loop in dart.lines.items()},
+        "lines": {name: {"vertices": len(loop), "length_m": round(loop_length(dart.vertices.astype(np.float64), loop), 4)}
+                  for name, loop in dart.lines.items()},
     }
 
 
@@ -63,7 +60,8 @@ def render_png(dart: Dart, path) -> None:
 
     from darts.render import BACK, FRONT, draw_mesh
 
-    colors = panel_colors(len(dart.panel_names))[dart.panel]
+    palette = panel_colors(len(dart.panel_names))
+    colors = palette[dart.panel]
     vertices = dart.vertices.astype(np.float64)
     normals = vertex_normals(vertices, dart.faces.astype(np.int64))
     fig = Figure(figsize=(10, 6))
@@ -74,7 +72,7 @@ def render_png(dart: Dart, path) -> None:
         visible = normals[ends] @ np.cross(right, up) > 0
         ax.scatter(vertices[ends[visible]] @ right, vertices[ends[visible]] @ up, s=2, c="k")
         ax.set_title(f"{dart.category} ({title})")
-    handles = [Rectangle((0, 0), 1, 1, color=c) for c in panel_colors(len(dart.panel_names))]
+    handles = [Rectangle((0, 0), 1, 1, color=c) for c in palette]
     fig.legend(handles, dart.panel_names, loc="lower center", ncol=min(len(handles), 6), fontsize=8, frameon=False)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=90, bbox_inches="tight", format="png")

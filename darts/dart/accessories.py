@@ -8,6 +8,7 @@ import numpy as np
 
 from darts.dart.model import Dart, Seam
 from darts.errors import DartsInputError
+from darts.templates.build import DEFAULT_EDGE_LENGTH
 
 LIFT = 0.004  # metres between an accessory and the garment under it
 ACCESSORIES = ("collar", "tie")
@@ -55,7 +56,7 @@ def _attach(dart: Dart, name: str, vertices: np.ndarray, faces: np.ndarray, stit
     dart.accessories = dart.accessories + [name]
 
 
-def add_collar(dart: Dart, width: float = 0.055, edge_length: float = 0.011) -> None:
+def add_collar(dart: Dart, width: float = 0.055, edge_length: float = DEFAULT_EDGE_LENGTH) -> None:
     """A collar band lying on the shoulders around the neckline, stitched to it."""
     ring = _neckline_ring(dart)
     base = dart.vertices[ring].astype(np.float64)
@@ -64,16 +65,15 @@ def add_collar(dart: Dart, width: float = 0.055, edge_length: float = 0.011) -> 
     outward[:, 1] = 0.0
     outward /= np.linalg.norm(outward, axis=1, keepdims=True)
     rows = max(int(np.ceil(width / edge_length)), 2) + 1
-    grid = [base]
-    for r in range(1, rows):
-        grid.append(_on_garment(dart, base + (r / (rows - 1)) * width * (outward - [0.0, 0.35, 0.0])))
+    reach = (np.arange(1, rows) / (rows - 1))[:, None, None] * width * (outward - [0.0, 0.35, 0.0])
+    draped = _on_garment(dart, (base + reach).reshape(-1, 3))
     # The ring follows the garment's boundary half-edges, so the collar runs the other way round:
     # welded to the neckline it continues the garment's surface with a consistent orientation.
     faces = _strip_faces(rows, len(ring), closed=True)[:, ::-1]
-    _attach(dart, "collar", np.concatenate(grid), faces, ring)
+    _attach(dart, "collar", np.concatenate([base, draped]), faces, ring)
 
 
-def add_tie(dart: Dart, length: float = 0.42, width: float = 0.07, edge_length: float = 0.011) -> None:
+def add_tie(dart: Dart, length: float = 0.42, width: float = 0.07, edge_length: float = DEFAULT_EDGE_LENGTH) -> None:
     """A tie hanging from the centre front of the neckline, stitched there."""
     ring = _neckline_ring(dart)
     base = dart.vertices[ring].astype(np.float64)
@@ -82,20 +82,20 @@ def add_tie(dart: Dart, length: float = 0.42, width: float = 0.07, edge_length: 
     top = dart.vertices[knot].astype(np.float64)
     columns = 5
     rows = max(int(np.ceil(length / edge_length)), 2) + 1
-    grid = [np.repeat(top[None], 1, 0)]
+    grid = []
     for r in range(1, rows):
         t = r / (rows - 1)
         half = 0.5 * width * min(1.0, 0.35 + t)
-        row = np.stack([np.linspace(-half, half, columns), np.full(columns, -t * length), np.zeros(columns)], 1) + top
-        grid.append(_on_garment(dart, row + [0.0, 0.0, 0.05]))
-    vertices = np.concatenate(grid)
+        grid.append(np.stack([np.linspace(-half, half, columns), np.full(columns, -t * length), np.zeros(columns)], 1))
+    # All rows are projected onto the garment in one query (one BVH), in front of the chest.
+    vertices = np.concatenate([top[None], _on_garment(dart, np.concatenate(grid) + top + [0.0, 0.0, 0.05])])
     # Fan from the knot vertex to the first row, then a grid.
     fan = np.array([(0, 1 + c + 1, 1 + c) for c in range(columns - 1)], np.int64)
     body = _strip_faces(rows - 1, columns, closed=False) + 1
     _attach(dart, "tie", vertices, np.concatenate([fan, body]), np.array([knot]))
 
 
-def add_accessory(dart: Dart, name: str, edge_length: float = 0.011) -> None:
+def add_accessory(dart: Dart, name: str, edge_length: float = DEFAULT_EDGE_LENGTH) -> None:
     """Add the accessory ``name`` (collar or tie) to a top or dress."""
     if name not in ACCESSORIES:
         raise DartsInputError(None, f"unknown accessory '{name}' (one of {', '.join(ACCESSORIES)})")

@@ -146,10 +146,10 @@ def _insert_seams(vertices, faces, category: Category, lm: Landmarks):
         vertices, faces, values = insert_level_set(vertices, faces, seam.field(vertices), locked=locked)
         locked = np.concatenate([locked, np.zeros(len(vertices) - len(locked), bool)]) | (values == 0)
     seams: dict[str, list] = {}
+    edges = np.unique(np.sort(directed_edges(faces), axis=1), axis=0)
     for seam in fields:
         values = seam.field(vertices)
         scale = np.abs(values).max() + 1e-12
-        edges = np.unique(np.sort(directed_edges(faces), axis=1), axis=0)
         on = (np.abs(values[edges]) < 1e-9 * scale + 1e-12).all(1)
         names = seam.name(0.5 * (vertices[edges[on, 0]] + vertices[edges[on, 1]]))
         for name in np.unique(names):
