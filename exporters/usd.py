@@ -39,14 +39,14 @@ class UsdAnimationWriter:
     """
 
     def __init__(self, path: str | os.PathLike, fps: float, start_frame: int = 0):
-        from pxr import Sdf, Usd, UsdGeom
+        from pxr import Sdf, Usd, UsdGeom, Vt
 
         self.path = Path(path)
         if self.path.suffix.lower() not in USD_SUFFIXES:
             raise DartsInputError(self.path, f"not a USD file name (one of {', '.join(USD_SUFFIXES)})")
         if not np.isfinite(fps) or fps <= 0:
             raise DartsInputError(None, f"fps must be positive, got {fps}")
-        self._geom, self._sdf = UsdGeom, Sdf
+        self._geom, self._sdf, self._vt = UsdGeom, Sdf, Vt
         self._stack = ExitStack()
         self._tmp = self._stack.enter_context(atomic_path(self.path, keep_suffix=True))
         os.unlink(self._tmp)  # USD creates the layer itself
@@ -92,13 +92,13 @@ class UsdAnimationWriter:
             p = np.asarray(points[name], np.float32)
             if p.shape != (track.vertex_count, 3) or not np.isfinite(p).all():
                 raise ValueError(f"frame {self.frames_written}: '{name}' points must be finite [{track.vertex_count}, 3]")
-            track.points_attr.Set(p.tolist(), time)
-            track.extent_attr.Set([p.min(0).tolist(), p.max(0).tolist()], time)
+            track.points_attr.Set(self._vt.Vec3fArray.FromNumpy(p), time)
+            track.extent_attr.Set(self._vt.Vec3fArray.FromNumpy(np.stack([p.min(0), p.max(0)])), time)
             if name in self._curves:
                 curves, segments = self._curves[name]
                 ends = p[segments].reshape(-1, 3)
-                curves.GetPointsAttr().Set(ends.tolist(), time)
-                curves.GetExtentAttr().Set([ends.min(0).tolist(), ends.max(0).tolist()], time)
+                curves.GetPointsAttr().Set(self._vt.Vec3fArray.FromNumpy(np.ascontiguousarray(ends)), time)
+                curves.GetExtentAttr().Set(self._vt.Vec3fArray.FromNumpy(np.stack([ends.min(0), ends.max(0)])), time)
         self.frames_written += 1
 
     def close(self) -> None:

@@ -1,9 +1,10 @@
-"""Shipped inputs: AMASS-format motions (``scenes/motions``) and, later, garments and presets."""
+"""Shipped inputs: AMASS-format motions (``scenes/motions``) and DART garments (``scenes/garments``)."""
 from __future__ import annotations
 
 from pathlib import Path
 
 MOTIONS_DIR = Path(__file__).parent / "motions"
+GARMENTS_DIR = Path(__file__).parent / "garments"
 
 
 def shipped_motions() -> list[str]:
@@ -11,9 +12,23 @@ def shipped_motions() -> list[str]:
     return sorted(p.stem for p in MOTIONS_DIR.glob("*.npz"))
 
 
+def shipped_garments() -> list[str]:
+    """Names of the shipped DARTs (``short-sleeve-top``, ...)."""
+    return sorted(p.stem for p in GARMENTS_DIR.glob("*.npz"))
+
+
+def _resolve(name_or_path: str, folder: Path) -> Path:
+    path = Path(name_or_path)
+    if not path.exists() and (folder / f"{name_or_path}.npz").is_file():
+        return folder / f"{name_or_path}.npz"
+    return path
+
+
 def resolve_motion(name_or_path: str) -> Path:
     """A motion path: the argument itself if it is a file, else the shipped motion of that name."""
-    path = Path(name_or_path)
-    if not path.exists() and (MOTIONS_DIR / f"{name_or_path}.npz").is_file():
-        return MOTIONS_DIR / f"{name_or_path}.npz"
-    return path
+    return _resolve(name_or_path, MOTIONS_DIR)
+
+
+def resolve_garment(name_or_path: str) -> Path:
+    """A garment path: the argument itself if it is a file, else the shipped DART of that name."""
+    return _resolve(name_or_path, GARMENTS_DIR)

@@ -1,30 +1,188 @@
-"""``darts-sim GARMENT MOTION``: placeholder until the Warp cloth solver lands (issue 4).
+"""``darts-sim GARMENT MOTION -o OUT``: drape a DART on the body and simulate it through a motion.
 
-It validates its arguments as the real command will and then says what is missing, exiting 2.
+Exit codes: 0 done, 2 bad input (one line, nothing written), 3 the run went unstable (the frames
+before it are written, with a message saying where it stopped).
 """
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from pathlib import Path
 
+import numpy as np
+
+from darts.body.io import load_body
 from darts.cli.errors import run_guarded
+from darts.dart.export import panel_colors
+from darts.dart.io import load_dart
+from darts.dart.model import MATERIALS, parse_seam_setting
 from darts.errors import DartsInputError
+from darts.fileio import atomic_path
 from darts.motion.amass import load_motion
-from scenes import resolve_motion
+from darts.motion.resample import resample
+from exporters.sequence import SEQUENCE_FORMATS, MeshSequenceWriter
+from exporters.usd import USD_SUFFIXES, UsdAnimationWriter
+from scenes import resolve_garment, resolve_motion
+from sim.body_track import build_body_track
+from sim.run import simulate, summary
+from sim.settings import DEFAULT_SUBSTEPS, SOLVERS, SimSettings
+
+UNSTABLE_EXIT = 3
+
+
+def _vector(text: str) -> tuple[float, float, float]:
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not np.all(np.isfinite(values)):
+        raise argparse.ArgumentTypeError(f"expected three numbers X,Y,Z, got '{text}'")
+    return values
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="darts-sim",
+        description="Simulate a DART garment on a body posed by an AMASS motion (Warp cloth solver). "
+                    "Output frames are in the AMASS world frame: Z up, metres.")
+    p.add_argument("garment", metavar="GARMENT", help="garment.npz (a DART) or a shipped garment name")
+    p.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
+    p.add_argument("-o", "--output", metavar="OUT", required=True,
+                   help="OUT.usd/.usda/.usdc, or a directory for an OBJ/PLY sequence (see --format)")
+    p.add_argument("--format", choices=SEQUENCE_FORMATS, default="obj", help="mesh sequence format (default obj)")
+    p.add_argument("--fps", type=float, default=30.0, help="simulation and output frame rate (default 30)")
+    p.add_argument("--start", type=int, default=0, help="first motion frame, at --fps (default 0)")
+    p.add_argument("--end", type=int, help="last motion frame, exclusive, at --fps (default: the end)")
+    p.add_argument("--frames", type=int, help="number of frames from --start")
+    p.add_argument("--settle", type=float, default=0.5,
+                   help="seconds in which the body blends from its rest pose into the first frame (default 0.5)")
+    defaults = SimSettings()
+    p.add_argument("--solver", choices=SOLVERS, default=defaults.solver, help="default xpbd")
+    p.add_argument("--substeps", type=int, default=None,
+                   help="substeps per frame (default: " + ", ".join(f"{k} {v}" for k, v in DEFAULT_SUBSTEPS.items()) + ")")
+    p.add_argument("--iterations", type=int, default=defaults.iterations, help="XPBD sweeps per substep (default 2)")
+    p.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
+    p.add_argument("--body", metavar="PATH", help="SMPL/SMPL-H/SMPL-X model file (default: the bundled body)")
+    p.add_argument("--material", choices=sorted(MATERIALS), help="replace the garment's material")
+    p.add_argument("--seam", action="append", default=[], metavar="NAME=REGIME[:STIFFNESS]",
+                   help="seam regime (welded, stiff, loose, repulsive, partial); NAME 'all' sets every seam")
+    p.add_argument("--wind", type=_vector, default=(0.0, 0.0, 0.0), metavar="X,Y,Z", help="wind in m/s (world frame)")
+    p.add_argument("--gust", type=float, default=0.0, help="relative gust strength of the wind, 0..1")
+    p.add_argument("--no-ground", action="store_true", help="no ground plane at z = 0")
+    p.add_argument("--seed", type=int, default=0, help="seed of the wind gusts (runs are deterministic)")
+    p.add_argument("--seam-curves", action="store_true", help="USD only: draw each seam pair as a curve")
+    p.add_argument("--stats", metavar="stats.json", help="write per-frame measurements as JSON")
+    p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    return p
+
+
+def _frame_range(args, count: int) -> tuple[int, int]:
+    end = args.end if args.end is not None else count
+    if args.frames is not None:
+        if args.frames < 1:
+            raise DartsInputError(None, f"--frames must be >= 1, got {args.frames}")
+        end = min(count, args.start + args.frames)
+    if not 0 <= args.start < end <= count:
+        raise DartsInputError(None, f"frame range [{args.start}, {end}) is empty or outside the motion's {count} frames at --fps")
+    return args.start, end
+
+
+def _writer(args):
+    out = Path(args.output)
+    if out.suffix.lower() in USD_SUFFIXES:
+        return UsdAnimationWriter(out, args.fps)
+    if out.suffix:
+        raise DartsInputError(out, f"output must end in {', '.join(USD_SUFFIXES)} or be a directory (no suffix)")
+    return MeshSequenceWriter(out, args.fps, args.format)
+
+
+class _NothingToKeep(Exception):
+    """The run went unstable before its first recorded frame: no output is written."""
+
+    def __init__(self, result):
+        super().__init__(result.message)
+        self.result = result
+
+
+def _fill(writer, args, dart, track) -> None:
+    """Declare the body (grey) and the garment (coloured by panel) on ``writer``."""
+    writer.add_mesh("body", track.faces, track.vertices.shape[1], np.full((len(track.faces), 3), 0.8))
+    writer.add_mesh("garment", dart.faces, len(dart.vertices), panel_colors(len(dart.panel_names))[dart.panel])
+    if args.seam_curves and len(dart.pairs):
+        writer.add_curves("garment", dart.pairs)
+
+
+def _settings(args) -> SimSettings:
+    substeps = args.substeps if args.substeps is not None else DEFAULT_SUBSTEPS[args.solver]
+    settings = SimSettings(fps=args.fps, substeps=substeps, iterations=args.iterations, solver=args.solver,
+                           device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed)
+    try:
+        settings.check()
+    except ValueError as exc:
+        raise DartsInputError(None, str(exc)) from None
+    if args.settle < 0 or not np.isfinite(args.settle):
+        raise DartsInputError(None, f"--settle must be >= 0 seconds, got {args.settle}")
+    return settings
 
 
 def _main(argv: list[str] | None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="darts-sim",
-        description="Simulate a DART garment on a body posed by an AMASS motion (not implemented yet).",
-    )
-    parser.add_argument("garment", metavar="GARMENT", help="garment.npz (a DART)")
-    parser.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
-    parser.add_argument("-o", "--output", metavar="OUT", help="output .usd/.usda/.usdc or a directory")
-    args = parser.parse_args(argv)
-    load_motion(resolve_motion(args.motion))
-    raise DartsInputError(None, "the cloth solver is not implemented yet: DART templates (issue 3) and the "
-                          "Warp solver (issue 4) are still to come; 'darts body pose' poses the body today")
+    args = parser().parse_args(argv)
+    settings = _settings(args)
+    dart = load_dart(resolve_garment(args.garment))
+    if args.material:
+        dart.material_name, dart.material = args.material, dict(MATERIALS[args.material])
+    for text in args.seam:
+        dart.set_seam(*parse_seam_setting(text))
+    motion = load_motion(resolve_motion(args.motion))
+    motion = resample(motion, args.fps) if abs(motion.fps - args.fps) > 1e-9 else motion
+    start, end = _frame_range(args, motion.num_frames)
+    motion = motion.with_frames(trans=motion.trans[start:end],
+                                **{name: arr[start:end] for name, arr in motion.parts().items()})
+    body = load_body(args.body)
+    if args.device != "cpu":
+        _check_device(args.device)
+    track = build_body_track(body, motion, args.fps, args.settle, progress=not args.quiet)
+
+    try:
+        with _writer(args) as writer:
+            _fill(writer, args, dart, track)
+            result = simulate(dart, track, settings, lambda g, b: writer.write_frame({"garment": g, "body": b}),
+                              progress=not args.quiet)
+            if not result.frames:
+                raise _NothingToKeep(result)
+    except _NothingToKeep as nothing:
+        result = nothing.result
+    stats = summary(result, settings, len(dart.vertices))
+    if args.stats:
+        with atomic_path(args.stats) as tmp:
+            Path(tmp).write_text(json.dumps(stats, indent=1))
+    if not args.quiet:
+        _print_summary(stats, args.output if result.frames else None)
+    if not result.stable:
+        print(f"darts-sim: {result.message}", file=sys.stderr)
+        return UNSTABLE_EXIT
+    return 0
+
+
+def _check_device(device: str) -> None:
+    from darts.geometry.warp_runtime import warp
+
+    wp = warp()
+    if device not in [str(d) for d in wp.get_devices()] and not (device == "cuda" and wp.is_cuda_available()):
+        raise DartsInputError(None, f"Warp device '{device}' is not available here (devices: "
+                              f"{', '.join(str(d) for d in wp.get_devices())})")
+
+
+def _print_summary(stats: dict, output: str | None) -> None:
+    gaps = ", ".join(f"{name} {gap * 1e3:.2f}" for name, gap in stats["max_seam_gap"].items())
+    print(f"{len(stats['frames'])} frames, {stats['particles']} particles, {stats['solver']} "
+          f"{stats['substeps']} substeps x {stats['iterations']} iterations at {stats['fps']:g} fps")
+    print(f"wall {stats['wall_seconds']:.1f} s, {stats['sim_fps']:.2f} simulated frames/s, "
+          f"max penetration {100 * stats['max_penetration']:.2f} % of vertices, max speed {stats['max_speed']:.2f} m/s")
+    print(f"max seam gap (mm): {gaps or 'no seams'}")
+    if output:
+        print(f"wrote {output}")
 
 
 def main(argv: list[str] | None = None) -> int:

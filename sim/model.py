@@ -6,7 +6,8 @@
 - bending: one hinge (i, j shared edge; k, l opposite vertices) per interior edge, with its rest
   dihedral angle;
 - seam springs: one per *active* pair of a stiff, loose, repulsive or partial seam, with that
-  seam's stiffness (N/m) and rest length (0, or > 0 when repulsive).
+  seam's stiffness (N/m) and rest length (0, or > 0 when repulsive); each end has an anchor, a
+  neighbour off every seam, which says which way the end retreats when coincident ends must part.
 """
 from __future__ import annotations
 
@@ -34,6 +35,7 @@ class ClothModel:
     spring_rest: np.ndarray  # [S]
     spring_stiffness: np.ndarray  # [S] N/m
     spring_seam: np.ndarray  # [S] index into seam_names
+    spring_anchors: np.ndarray  # [S,2] an off-seam neighbour of each end (-1: none), for repulsion
     seam_names: list[str]
     material: dict
 
@@ -58,27 +60,100 @@ def _hinges(faces: np.ndarray) -> np.ndarray:
     return np.stack([a[first], b[first], opposite[first], opposite[second]], 1)
 
 
+def _anchors(ends: np.ndarray, edges: np.ndarray, on_seam: np.ndarray) -> np.ndarray:
+    """For each particle in ``ends``, one edge neighbour that is on no seam (-1 where none is)."""
+    both = np.concatenate([edges, edges[:, ::-1]])
+    both = both[~on_seam[both[:, 1]]]
+    first = np.full(len(on_seam), -1, np.int64)
+    first[both[::-1, 0]] = both[::-1, 1]  # the last write wins: the first listed neighbour
+    return first[ends]
+
+
+def collapse_short_edges(points: np.ndarray, faces: np.ndarray, apart: np.ndarray, min_length: float) -> np.ndarray:
+    """Group index of each point after collapsing, shortest first, every edge shorter than
+    ``min_length`` whose collapse keeps the surface a manifold (link condition, and no corner left
+    with fewer than three neighbours) and does not join the two ends of a pair in ``apart`` [K,2]."""
+    neighbours = [set() for _ in range(len(points))]
+    for a, b in np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).tolist():
+        neighbours[a].add(b)
+        neighbours[b].add(a)
+    opposite: dict[tuple[int, int], set] = {}
+    for tri in faces.tolist():
+        for c in range(3):
+            a, b, o = tri[c], tri[(c + 1) % 3], tri[(c + 2) % 3]
+            opposite.setdefault((min(a, b), max(a, b)), set()).add(o)
+    partners = [set() for _ in range(len(points))]
+    for a, b in np.asarray(apart).tolist():
+        partners[a].add(b)
+        partners[b].add(a)
+    members = [{i} for i in range(len(points))]
+    group = np.arange(len(points))
+    lengths = np.linalg.norm(points[faces[:, [1, 2, 0]]] - points[faces], axis=2).reshape(-1)
+    short = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]], 0)[
+        np.argsort(np.concatenate([lengths[0::3], lengths[1::3], lengths[2::3]]))]
+    for a, b in short[np.sort(np.concatenate([lengths[0::3], lengths[1::3], lengths[2::3]])) < min_length].tolist():
+        a, b = group[a], group[b]
+        key = (min(a, b), max(a, b))
+        if (a == b or key not in opposite or neighbours[a] & neighbours[b] != opposite[key]
+                or any(len(neighbours[o]) < 4 for o in opposite[key]) or partners[a] & members[b]):
+            continue
+        for n in neighbours[b] - {a}:  # b's edges and faces become a's
+            neighbours[n].discard(b)
+            neighbours[n].add(a)
+            for o in opposite.pop((min(b, n), max(b, n)), set()):
+                if o != a:
+                    opposite.setdefault((min(a, n), max(a, n)), set()).add(o)
+        for edge, others in opposite.items():
+            if b in others:
+                others.discard(b)
+                if a not in edge:
+                    others.add(a)
+        opposite.pop(key, None)
+        neighbours[a] |= neighbours[b] - {a, b}
+        neighbours[a].discard(b)
+        members[a] |= members[b]
+        partners[a] |= partners[b]
+        group[list(members[b])] = a
+    return np.unique(group, return_inverse=True)[1]
+
+
+#: Edges shorter than this fraction of the median edge are collapsed in the solver's model.
+SHORT_EDGE_FRACTION = 0.3
+
+
 def cloth_model(dart: Dart) -> ClothModel:
     """The solver's model of ``dart`` (rest state in the canonical frame)."""
     welded_seams = [i for i, s in enumerate(dart.seams) if s.regime == "welded"]
     particle = merged_index(dart, dart.pairs[np.isin(dart.pair_seam, welded_seams)])
+    rest = np.zeros((particle.max() + 1, 3))
+    rest[particle] = dart.vertices
+    faces = particle[dart.faces]
+    sprung = dart.pair_active & ~np.isin(dart.pair_seam, welded_seams)
+    edge_lengths = np.linalg.norm(rest[faces[:, [1, 2, 0]]] - rest[faces], axis=2)
+    group = collapse_short_edges(rest, faces, particle[dart.pairs[~np.isin(dart.pair_seam, welded_seams)]],
+                                 SHORT_EDGE_FRACTION * np.median(edge_lengths))
+    particle = group[particle]
     count = particle.max() + 1
     rest = np.zeros((count, 3))
-    rest[particle] = dart.vertices
+    np.add.at(rest, particle, dart.vertices)
+    rest /= np.bincount(particle, minlength=count)[:, None]
     faces = particle[dart.faces].astype(np.int64)
+    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])]
     tri = rest[faces]
     area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     mass = np.zeros(count)
     np.add.at(mass, faces.reshape(-1), np.repeat(area / 3.0 * dart.material["density"], 3))
     edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
     hinges = _hinges(faces)
-    sprung = dart.pair_active & ~np.isin(dart.pair_seam, welded_seams)
     seam_of = dart.pair_seam[sprung]
+    springs = particle[dart.pairs[sprung]].astype(np.int64)
+    on_seam = np.zeros(count, bool)
+    on_seam[particle[dart.pairs.reshape(-1)]] = True
     return ClothModel(
         rest=rest, particle_of_vertex=particle, faces=faces, mass=mass, edges=edges,
         edge_rest=np.linalg.norm(rest[edges[:, 0]] - rest[edges[:, 1]], axis=1),
         hinges=hinges, hinge_rest_angle=dihedral_angles(rest, hinges),
-        springs=particle[dart.pairs[sprung]].astype(np.int64),
+        springs=springs, spring_anchors=_anchors(springs, edges, on_seam),
         spring_rest=np.array([dart.seams[s].rest_length for s in seam_of]),
         spring_stiffness=np.array([dart.seams[s].stiffness for s in seam_of]),
         spring_seam=seam_of.astype(np.int64), seam_names=dart.seam_names, material=dict(dart.material),

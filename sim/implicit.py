@@ -1,0 +1,228 @@
+"""Semi-implicit mass-spring integrator (Baraff & Witkin 1998): one linearised backward-Euler step.
+
+Per substep solve (M + h^2 H) dv = h (f + h g M) - h^2 H v with H the stiffness matrix (springs:
+k [n n^T + max(0, 1 - L/l)(I - n n^T)], kept positive semi-definite; hinges: kappa g g^T), by a
+fixed number of Jacobi-preconditioned conjugate-gradient iterations that never leave the device;
+then x += h v, contacts and friction as in XPBD, v = dx / h.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from darts.geometry.warp_runtime import warp
+from sim import kernels
+from sim.solver import ClothSolver, hinge_stiffness
+
+wp = warp()
+
+
+@wp.func
+def _spring_block(d: wp.vec3, rest: float, stiffness: float):
+    length = wp.length(d)
+    if length < 1.0e-9:
+        return wp.vec3(0.0), stiffness * wp.identity(n=3, dtype=float)
+    n = d / length
+    nn = wp.outer(n, n)
+    return -stiffness * (length - rest) * n, stiffness * (nn + wp.max(0.0, 1.0 - rest / length) * (wp.identity(n=3, dtype=float) - nn))
+
+
+@wp.kernel
+def spring_forces(pairs: wp.array2d(dtype=wp.int32), rest: wp.array(dtype=float), stiffness: wp.array(dtype=float),
+                  x: wp.array(dtype=wp.vec3), force: wp.array(dtype=wp.vec3), blocks: wp.array(dtype=wp.mat33),
+                  diagonal: wp.array(dtype=float)):
+    """Spring force f_a = -k (l - L) n (f_b = -f_a), its stiffness block, and the block's trace / 3."""
+    c = wp.tid()
+    a, b = pairs[c, 0], pairs[c, 1]
+    f, block = _spring_block(x[a] - x[b], rest[c], stiffness[c])
+    blocks[c] = block
+    wp.atomic_add(force, a, f)
+    wp.atomic_sub(force, b, f)
+    t = (block[0, 0] + block[1, 1] + block[2, 2]) / 3.0
+    wp.atomic_add(diagonal, a, t)
+    wp.atomic_add(diagonal, b, t)
+
+
+@wp.kernel
+def hinge_forces(hinges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=float), kappa: wp.array(dtype=float),
+                 x: wp.array(dtype=wp.vec3), force: wp.array(dtype=wp.vec3), gradients: wp.array2d(dtype=wp.vec3),
+                 diagonal: wp.array(dtype=float)):
+    """Bending force f = -kappa (angle - rest) d(angle)/dx and its Gauss-Newton stiffness kappa g g^T."""
+    h = wp.tid()
+    angle, gi, gj, gk, gl, ok = kernels.dihedral_gradient(x[hinges[h, 0]], x[hinges[h, 1]], x[hinges[h, 2]], x[hinges[h, 3]])
+    if ok == 0:
+        gi = wp.vec3(0.0)
+        gj = wp.vec3(0.0)
+        gk = wp.vec3(0.0)
+        gl = wp.vec3(0.0)
+    c = angle - rest_angle[h]
+    if c > wp.pi:
+        c = c - 2.0 * wp.pi
+    if c < -wp.pi:
+        c = c + 2.0 * wp.pi
+    gradients[h, 0] = gi
+    gradients[h, 1] = gj
+    gradients[h, 2] = gk
+    gradients[h, 3] = gl
+    for corner in range(4):
+        g = gradients[h, corner]
+        wp.atomic_add(force, hinges[h, corner], -kappa[h] * c * g)
+        wp.atomic_add(diagonal, hinges[h, corner], kappa[h] * wp.dot(g, g) / 3.0)
+
+
+@wp.kernel
+def mass_times(mass: wp.array(dtype=float), scale: float, p: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
+    """out = scale * M p (the start of a matrix-vector product)."""
+    i = wp.tid()
+    out[i] = scale * mass[i] * p[i]
+
+
+@wp.kernel
+def add_spring_product(pairs: wp.array2d(dtype=wp.int32), blocks: wp.array(dtype=wp.mat33), scale: float,
+                       p: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
+    """out += scale * H_springs p."""
+    c = wp.tid()
+    a, b = pairs[c, 0], pairs[c, 1]
+    y = scale * (blocks[c] * (p[a] - p[b]))
+    wp.atomic_add(out, a, y)
+    wp.atomic_sub(out, b, y)
+
+
+@wp.kernel
+def add_hinge_product(hinges: wp.array2d(dtype=wp.int32), gradients: wp.array2d(dtype=wp.vec3),
+                      kappa: wp.array(dtype=float), scale: float, p: wp.array(dtype=wp.vec3),
+                      out: wp.array(dtype=wp.vec3)):
+    """out += scale * kappa g (g . p) over the hinge's four corners."""
+    h = wp.tid()
+    s = float(0.0)
+    for corner in range(4):
+        s += wp.dot(gradients[h, corner], p[hinges[h, corner]])
+    for corner in range(4):
+        wp.atomic_add(out, hinges[h, corner], (scale * kappa[h] * s) * gradients[h, corner])
+
+
+@wp.kernel
+def start_solve(force: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float), gravity: wp.vec3, dt: float,
+                stiffness_v: wp.array(dtype=wp.vec3), diagonal: wp.array(dtype=float), scale: float,
+                residual: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3), direction: wp.array(dtype=wp.vec3),
+                dv: wp.array(dtype=wp.vec3), rz: wp.array(dtype=float)):
+    """b = h (f + M g) - h^2 H v; dv = 0, r = b, z = P^-1 r, p = z, rz = r.z."""
+    i = wp.tid()
+    r = dt * (force[i] + mass[i] * gravity) - stiffness_v[i]
+    zi = r / (mass[i] + scale * diagonal[i])
+    residual[i] = r
+    z[i] = zi
+    direction[i] = zi
+    dv[i] = wp.vec3(0.0)
+    wp.atomic_add(rz, 0, wp.dot(r, zi))
+
+
+@wp.kernel
+def dot_into(a: wp.array(dtype=wp.vec3), b: wp.array(dtype=wp.vec3), out: wp.array(dtype=float)):
+    """out[0] += a . b."""
+    i = wp.tid()
+    wp.atomic_add(out, 0, wp.dot(a[i], b[i]))
+
+
+@wp.kernel
+def cg_update(direction: wp.array(dtype=wp.vec3), product: wp.array(dtype=wp.vec3), rz: wp.array(dtype=float),
+              p_ap: wp.array(dtype=float), mass: wp.array(dtype=float), diagonal: wp.array(dtype=float),
+              scale: float, dv: wp.array(dtype=wp.vec3), residual: wp.array(dtype=wp.vec3),
+              z: wp.array(dtype=wp.vec3), rz_next: wp.array(dtype=float)):
+    """alpha = r.z / p.Ap; dv += alpha p; r -= alpha Ap; z = P^-1 r; accumulate the new r.z."""
+    i = wp.tid()
+    alpha = float(0.0)
+    if p_ap[0] > 1.0e-30:
+        alpha = rz[0] / p_ap[0]
+    dv[i] = dv[i] + alpha * direction[i]
+    r = residual[i] - alpha * product[i]
+    residual[i] = r
+    zi = r / (mass[i] + scale * diagonal[i])
+    z[i] = zi
+    wp.atomic_add(rz_next, 0, wp.dot(r, zi))
+
+
+@wp.kernel
+def cg_direction(z: wp.array(dtype=wp.vec3), rz: wp.array(dtype=float), rz_next: wp.array(dtype=float),
+                 direction: wp.array(dtype=wp.vec3)):
+    """p = z + beta p with beta = r.z (new) / r.z (old)."""
+    i = wp.tid()
+    beta = float(0.0)
+    if rz[0] > 1.0e-30:
+        beta = rz_next[0] / rz[0]
+    direction[i] = z[i] + beta * direction[i]
+
+
+@wp.kernel
+def advance(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dv: wp.array(dtype=wp.vec3),
+            x_start: wp.array(dtype=wp.vec3), dt: float, damping: float):
+    """v <- d (v + dv); x <- x + h v (x_start keeps the old x)."""
+    i = wp.tid()
+    x_start[i] = x[i]
+    vi = damping * (v[i] + dv[i])
+    v[i] = vi
+    x[i] = x[i] + dt * vi
+
+
+class MassSpringIntegrator:
+    """``--solver mass-spring``: springs on every edge (the material's stretch stiffness) and seam
+    pair, hinges with kappa from ``hinge_stiffness``, integrated semi-implicitly."""
+
+    def __init__(self, solver: ClothSolver):
+        model, device = solver.model, solver.device
+        self.solver = solver
+        sprung = model.spring_stiffness > 0
+        pairs = np.concatenate([model.edges, model.springs[sprung]]).astype(np.int32)
+        self.pairs = wp.array(pairs, dtype=wp.int32, device=device)
+        self.rest = wp.array(np.concatenate([model.edge_rest, model.spring_rest[sprung]]).astype(np.float32), device=device)
+        self.stiffness = wp.array(np.concatenate([np.full(len(model.edges), model.material["stretch_stiffness"]),
+                                                  model.spring_stiffness[sprung]]).astype(np.float32), device=device)
+        self.hinges = wp.array(model.hinges.astype(np.int32), dtype=wp.int32, device=device)
+        self.rest_angle = wp.array(model.hinge_rest_angle.astype(np.float32), device=device)
+        self.kappa = wp.array(hinge_stiffness(model).astype(np.float32), device=device)
+        self.blocks = wp.zeros(len(pairs), dtype=wp.mat33, device=device)
+        self.gradients = wp.zeros((len(model.hinges), 4), dtype=wp.vec3, device=device)
+        n = solver.count
+        self.diagonal = wp.zeros(n, dtype=float, device=device)
+        self.dv, self.residual, self.z, self.direction, self.product = (
+            wp.zeros(n, dtype=wp.vec3, device=device) for _ in range(5))
+        self.scalars = wp.zeros(2 * solver.settings.cg_iterations + 1, dtype=float, device=device)  # r.z, p.Ap, ...
+        self.damping = float(np.exp(-solver.settings.damping / (solver.settings.fps * solver.settings.substeps)))
+
+    def _stiffness_product(self, p, scale: float, mass_scale: float) -> None:
+        """product = mass_scale M p + scale H p."""
+        s = self.solver
+        wp.launch(mass_times, dim=s.count, inputs=[s.mass, mass_scale, p, self.product], device=s.device)
+        wp.launch(add_spring_product, dim=self.pairs.shape[0], inputs=[self.pairs, self.blocks, scale, p, self.product],
+                  device=s.device)
+        wp.launch(add_hinge_product, dim=self.hinges.shape[0],
+                  inputs=[self.hinges, self.gradients, self.kappa, scale, p, self.product], device=s.device)
+
+    def substep(self, dt: float, time: float, index: int) -> None:
+        s, device, h2 = self.solver, self.solver.device, dt * dt
+        s.external_forces(time)
+        self.diagonal.zero_()
+        self.scalars.zero_()
+        wp.launch(spring_forces, dim=self.pairs.shape[0],
+                  inputs=[self.pairs, self.rest, self.stiffness, s.x, s.force, self.blocks, self.diagonal], device=device)
+        wp.launch(hinge_forces, dim=self.hinges.shape[0],
+                  inputs=[self.hinges, self.rest_angle, self.kappa, s.x, s.force, self.gradients, self.diagonal],
+                  device=device)
+        self._stiffness_product(s.v, h2, 0.0)  # h^2 H v
+        rz = self.scalars[0:1]
+        wp.launch(start_solve, dim=s.count,
+                  inputs=[s.force, s.mass, wp.vec3(*s.settings.gravity), dt, self.product, self.diagonal, h2,
+                          self.residual, self.z, self.direction, self.dv, rz], device=device)
+        for k in range(s.settings.cg_iterations):
+            p_ap, rz_next = self.scalars[2 * k + 1:2 * k + 2], self.scalars[2 * k + 2:2 * k + 3]
+            self._stiffness_product(self.direction, h2, 1.0)
+            wp.launch(dot_into, dim=s.count, inputs=[self.direction, self.product, p_ap], device=device)
+            wp.launch(cg_update, dim=s.count,
+                      inputs=[self.direction, self.product, rz, p_ap, s.mass, self.diagonal, h2, self.dv,
+                              self.residual, self.z, rz_next], device=device)
+            wp.launch(cg_direction, dim=s.count, inputs=[self.z, rz, rz_next, self.direction], device=device)
+            rz = rz_next
+        wp.launch(advance, dim=s.count, inputs=[s.x, s.v, self.dv, s.x_start, dt, self.damping], device=device)
+        s.update_contacts(index, dt)
+        s.resolve_contacts()
+        s.apply_friction(dt)
+        wp.launch(kernels.velocities_from_positions, dim=s.count, inputs=[s.x, s.x_start, dt, s.v], device=device)

@@ -1,0 +1,233 @@
+"""Warp kernels of the cloth step, shared by both integrators (world frame, Z up, SI units).
+
+Constraint kernels take an ``offset`` so that one launch can cover one colour of a colour-sorted
+constraint list (race-free on CUDA) or, on the CPU backend, which runs a launch's threads in order,
+the whole list at once with the same result.
+"""
+from __future__ import annotations
+
+from darts.geometry.warp_runtime import warp
+
+wp = warp()
+
+
+@wp.kernel
+def body_frame(start: wp.array(dtype=wp.vec3), end: wp.array(dtype=wp.vec3), weight: float, fps: float,
+               points: wp.array(dtype=wp.vec3), velocities: wp.array(dtype=wp.vec3)):
+    """Body vertices between two frames: p = (1 - w) start + w end, v = (end - start) * fps."""
+    i = wp.tid()
+    points[i] = (1.0 - weight) * start[i] + weight * end[i]
+    velocities[i] = (end[i] - start[i]) * fps
+
+
+@wp.kernel
+def aerodynamic_forces(faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+                       wind: wp.vec3, air_density: float, drag_coefficient: float, force: wp.array(dtype=wp.vec3)):
+    """Wind and air drag on each face: F = 1/2 rho C_d A (u.n)|u.n| n, u = wind - face velocity."""
+    f = wp.tid()
+    a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
+    scaled = wp.cross(x[b] - x[a], x[c] - x[a])
+    double_area = wp.length(scaled)
+    if double_area < 1.0e-12:
+        return
+    n = scaled / double_area
+    u = wind - (v[a] + v[b] + v[c]) / 3.0
+    un = wp.dot(u, n)
+    share = (0.5 * air_density * drag_coefficient * 0.5 * double_area * un * wp.abs(un) / 3.0) * n
+    wp.atomic_add(force, a, share)
+    wp.atomic_add(force, b, share)
+    wp.atomic_add(force, c, share)
+
+
+@wp.kernel
+def predict(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3),
+            force: wp.array(dtype=wp.vec3), inverse_mass: wp.array(dtype=float), gravity: wp.vec3, dt: float,
+            damping: float):
+    """Explicit velocity step then position prediction: v <- d (v + dt (g + f / m)), x <- x + dt v."""
+    i = wp.tid()
+    x_start[i] = x[i]
+    vi = damping * (v[i] + dt * (gravity + force[i] * inverse_mass[i]))
+    v[i] = vi
+    x[i] = x[i] + dt * vi
+
+
+@wp.kernel
+def velocities_from_positions(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3), dt: float,
+                              v: wp.array(dtype=wp.vec3)):
+    """v = (x - x_start) / dt."""
+    i = wp.tid()
+    v[i] = (x[i] - x_start[i]) / dt
+
+
+@wp.kernel
+def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), reach: float,
+                  contact_point: wp.array(dtype=wp.vec3), contact_normal: wp.array(dtype=wp.vec3),
+                  contact_velocity: wp.array(dtype=wp.vec3), in_contact: wp.array(dtype=wp.int32)):
+    """Closest body point within ``reach`` of each particle, with the outward direction there."""
+    i = wp.tid()
+    p = x[i]
+    query = wp.mesh_query_point_sign_normal(mesh, p, reach)
+    in_contact[i] = 0
+    if query.result:
+        c = wp.mesh_eval_position(mesh, query.face, query.u, query.v)
+        n = wp.mesh_eval_face_normal(mesh, query.face)
+        gap = wp.length(p - c)
+        if gap > 1.0e-6:
+            n = query.sign * (p - c) / gap
+        contact_point[i] = c
+        contact_normal[i] = n
+        contact_velocity[i] = wp.mesh_eval_velocity(mesh, query.face, query.u, query.v)
+        in_contact[i] = 1
+
+
+@wp.kernel
+def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=wp.vec3),
+                     contact_normal: wp.array(dtype=wp.vec3), contact_velocity: wp.array(dtype=wp.vec3),
+                     in_contact: wp.array(dtype=wp.int32), elapsed: float, thickness: float, ground: int,
+                     ground_height: float, body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
+    """Move particles to ``thickness`` outside the body's tangent plane at their contact, carried
+    by the body's velocity for the ``elapsed`` seconds since the contact was found (and above the
+    ground plane z = ground_height), adding up how far each was pushed."""
+    i = wp.tid()
+    p = x[i]
+    if in_contact[i] == 1:
+        plane = contact_point[i] + elapsed * contact_velocity[i]
+        depth = thickness - wp.dot(p - plane, contact_normal[i])
+        if depth > 0.0:
+            p = p + depth * contact_normal[i]
+            body_push[i] = body_push[i] + depth
+    if ground == 1:
+        depth = ground_height + thickness - p[2]
+        if depth > 0.0:
+            p = wp.vec3(p[0], p[1], ground_height + thickness)
+            ground_push[i] = ground_push[i] + depth
+    x[i] = p
+
+
+@wp.func
+def _coulomb(p: wp.vec3, start: wp.vec3, normal: wp.vec3, surface_velocity: wp.vec3, push: float,
+             friction: float, dt: float):
+    """Remove the tangential motion relative to the surface, up to friction * normal push."""
+    slide = (p - start) - surface_velocity * dt
+    tangential = slide - wp.dot(slide, normal) * normal
+    length = wp.length(tangential)
+    if length <= friction * push:
+        return p - tangential
+    return p - tangential * (friction * push / length)
+
+
+@wp.kernel
+def apply_friction(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3),
+                   contact_normal: wp.array(dtype=wp.vec3), contact_velocity: wp.array(dtype=wp.vec3),
+                   friction: float, dt: float, body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
+    """Coulomb friction once per substep, from the total normal push of the contact sweeps."""
+    i = wp.tid()
+    p = x[i]
+    if body_push[i] > 0.0:
+        p = _coulomb(p, x_start[i], contact_normal[i], contact_velocity[i], body_push[i], friction, dt)
+    if ground_push[i] > 0.0:
+        p = _coulomb(p, x_start[i], wp.vec3(0.0, 0.0, 1.0), wp.vec3(0.0), ground_push[i], friction, dt)
+    x[i] = p
+    body_push[i] = 0.0
+    ground_push[i] = 0.0
+
+
+@wp.kernel
+def solve_distances(offset: int, pairs: wp.array2d(dtype=wp.int32), rest: wp.array(dtype=float),
+                    compliance: wp.array(dtype=float), anchors: wp.array2d(dtype=wp.int32),
+                    inverse_mass: wp.array(dtype=float), dt: float, multiplier: wp.array(dtype=float), x: wp.array(dtype=wp.vec3)):
+    """XPBD distance constraint C = |x_a - x_b| - L with compliance 1/k.
+
+    When the ends coincide and L > 0 (a repulsive seam), they separate along their anchors: each end
+    retreats towards an interior particle of its own panel."""
+    c = wp.tid() + offset
+    a, b = pairs[c, 0], pairs[c, 1]
+    wa, wb = inverse_mass[a], inverse_mass[b]
+    d = x[a] - x[b]
+    length = wp.length(d)
+    if length < 1.0e-7:
+        if rest[c] <= 0.0 or anchors[c, 0] < 0 or anchors[c, 1] < 0:
+            return
+        d = (x[anchors[c, 0]] - x[a]) - (x[anchors[c, 1]] - x[b])
+        if wp.length(d) < 1.0e-9:
+            return
+        d = wp.normalize(d) * 1.0e-7
+        length = 1.0e-7
+    n = d / length
+    alpha = compliance[c] / (dt * dt)
+    step = (-(length - rest[c]) - alpha * multiplier[c]) / (wa + wb + alpha)
+    multiplier[c] = multiplier[c] + step
+    x[a] = x[a] + wa * step * n
+    x[b] = x[b] - wb * step * n
+
+
+@wp.func
+def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3):
+    """Angle of the hinge (edge i-j; triangles (i, j, k) and (j, i, l)), 0 when flat, and its gradient."""
+    e = xj - xi
+    e_len2 = wp.dot(e, e)
+    n1 = wp.cross(e, xk - xi)
+    n2 = wp.cross(xl - xi, e)
+    a1 = wp.length(n1)
+    a2 = wp.length(n2)
+    if e_len2 < 1.0e-16 or a1 < 1.0e-16 or a2 < 1.0e-16:
+        return 0.0, wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0), 0
+    e_len = wp.sqrt(e_len2)
+    u1 = n1 / a1
+    u2 = n2 / a2
+    angle = wp.atan2(wp.dot(wp.cross(u1, u2), e / e_len), wp.dot(u1, u2))
+    # d(angle)/dx_k = -n1 / h1 and d(angle)/dx_l = -n2 / h2 (h = distance of k, l from the edge line);
+    # the edge ends take the rest so that the gradient is translation and rotation invariant.
+    gk = -u1 * (e_len / a1)
+    gl = -u2 * (e_len / a2)
+    sk = wp.dot(xk - xi, e) / e_len2
+    sl = wp.dot(xl - xi, e) / e_len2
+    gi = -(1.0 - sk) * gk - (1.0 - sl) * gl
+    gj = -sk * gk - sl * gl
+    return angle, gi, gj, gk, gl, 1
+
+
+@wp.kernel
+def solve_bending(offset: int, hinges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=float),
+                  compliance: wp.array(dtype=float), inverse_mass: wp.array(dtype=float), dt: float,
+                  multiplier: wp.array(dtype=float), x: wp.array(dtype=wp.vec3)):
+    """XPBD dihedral constraint C = angle - rest angle (wrapped to [-pi, pi]) with compliance 1/kappa."""
+    h = wp.tid() + offset
+    i, j, k, l = hinges[h, 0], hinges[h, 1], hinges[h, 2], hinges[h, 3]
+    angle, gi, gj, gk, gl, ok = dihedral_gradient(x[i], x[j], x[k], x[l])
+    if ok == 0:
+        return
+    c = angle - rest_angle[h]
+    if c > wp.pi:
+        c = c - 2.0 * wp.pi
+    if c < -wp.pi:
+        c = c + 2.0 * wp.pi
+    wi, wj, wk, wl = inverse_mass[i], inverse_mass[j], inverse_mass[k], inverse_mass[l]
+    weight = wi * wp.dot(gi, gi) + wj * wp.dot(gj, gj) + wk * wp.dot(gk, gk) + wl * wp.dot(gl, gl)
+    alpha = compliance[h] / (dt * dt)
+    if weight + alpha < 1.0e-20:
+        return
+    step = (-c - alpha * multiplier[h]) / (weight + alpha)
+    multiplier[h] = multiplier[h] + step
+    x[i] = x[i] + wi * step * gi
+    x[j] = x[j] + wj * step * gj
+    x[k] = x[k] + wk * step * gk
+    x[l] = x[l] + wl * step * gl
+
+
+@wp.kernel
+def frame_measures(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+                   inside: wp.array(dtype=wp.int32), max_speed: wp.array(dtype=float),
+                   finite: wp.array(dtype=wp.int32)):
+    """Per frame: particles inside the body (sign by the angle-weighted pseudo-normal at the closest
+    point, exact for a closed body that does not intersect itself), the largest speed, any non-finite value."""
+    i = wp.tid()
+    p = x[i]
+    vi = v[i]
+    if not (wp.isfinite(p) and wp.isfinite(vi)):
+        wp.atomic_min(finite, 0, 0)
+        return
+    query = wp.mesh_query_point_sign_normal(mesh, p, 10.0)
+    if query.result and query.sign < 0.0:
+        wp.atomic_add(inside, 0, 1)
+    wp.atomic_max(max_speed, 0, wp.length(vi))

@@ -1,0 +1,102 @@
+"""One simulation run: a DART on a body track, frame by frame, with per-frame measurements.
+
+Frames handed to ``sink`` and measured are the recorded ones (after the settle period), in the
+world frame (Z up, metres). Seam gaps are measured on the DART's own vertices (both ends of every
+pair), penetration on the solver's particles.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from darts.dart.model import Dart
+from sim.body_track import BodyTrack
+from sim.model import cloth_model
+from sim.settings import SimSettings
+from sim.solver import ClothSolver
+
+
+@dataclass
+class RunResult:
+    """What a run measured; ``stable`` False means it stopped at ``message`` keeping the frames before."""
+
+    frames: list[dict] = field(default_factory=list)
+    stable: bool = True
+    message: str = ""
+    wall_seconds: float = 0.0
+    simulated_frames: int = 0
+    particles: int = 0
+
+
+def seam_gap_stats(dart: Dart, vertices: np.ndarray) -> dict[str, dict[str, float]]:
+    """Per seam: mean and max gap (m) over its pairs; partial seams add ``sprung_max`` and
+    ``open_mean``, the gaps on the sprung and unsprung parts."""
+    stats = dart.seam_gaps(vertices)
+    gaps = np.linalg.norm(vertices[dart.pairs[:, 0]] - vertices[dart.pairs[:, 1]], axis=1)
+    active = dart.pair_active
+    for index, seam in enumerate(dart.seams):
+        if seam.regime == "partial":
+            mine = dart.pair_seam == index
+            sprung, open_ = gaps[mine & active], gaps[mine & ~active]
+            stats[seam.name]["sprung_max"] = float(sprung.max()) if len(sprung) else 0.0
+            stats[seam.name]["open_mean"] = float(open_.mean()) if len(open_) else 0.0
+    return stats
+
+
+def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
+             sink: Callable[[np.ndarray, np.ndarray], None] | None = None, progress: bool = False) -> RunResult:
+    """Drape ``dart`` from its rest pose through ``track``; ``sink(garment [V,3], body [B,3])`` gets
+    every recorded frame. Stops early (``stable`` False) on a non-finite value or a particle faster
+    than ``settings.max_speed``."""
+    from tqdm import tqdm
+
+    model = cloth_model(dart)
+    solver = ClothSolver(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
+    result = RunResult(particles=len(model.rest))
+    total = len(track.vertices)
+    start = time.perf_counter()
+    bar = tqdm(total=total - 1, unit="frame", desc="simulating", disable=not progress, leave=False)
+    for k in range(total):
+        if k > 0:
+            solver.step_frame(track.vertices[k])
+            result.simulated_frames += 1
+            bar.update(1)
+        penetration, max_speed, finite = solver.measure()
+        phase = "settle" if k < track.settle_frames else "frame"
+        index = k if k < track.settle_frames else k - track.settle_frames
+        if not finite or max_speed > settings.max_speed:
+            what = "a non-finite position or velocity" if not finite else f"a particle at {max_speed:.1f} m/s"
+            result.stable = False
+            result.message = (f"unstable at {phase} {index}: {what} (limit {settings.max_speed:g} m/s); "
+                              f"kept the {len(result.frames)} good frames before it")
+            break
+        if k < track.settle_frames:
+            continue
+        vertices = solver.positions()[model.particle_of_vertex]
+        result.frames.append({"penetration": penetration, "max_speed": max_speed,
+                              "seam_gap": seam_gap_stats(dart, vertices)})
+        if sink is not None:
+            sink(vertices, track.vertices[k])
+    bar.close()
+    result.wall_seconds = time.perf_counter() - start
+    return result
+
+
+def summary(result: RunResult, settings: SimSettings, vertices: int) -> dict:
+    """The ``--stats`` document: run settings, totals and every frame's measurements."""
+    frames = result.frames
+    seams = frames[0]["seam_gap"].keys() if frames else []
+    return {
+        "vertices": vertices, "particles": result.particles, "solver": settings.solver,
+        "substeps": settings.substeps, "iterations": settings.iterations, "fps": settings.fps,
+        "wall_seconds": result.wall_seconds, "simulated_frames": result.simulated_frames,
+        "sim_fps": result.simulated_frames / result.wall_seconds if result.wall_seconds > 0 else 0.0,
+        "stable": result.stable, "message": result.message,
+        "max_penetration": max((f["penetration"] for f in frames), default=0.0),
+        "max_speed": max((f["max_speed"] for f in frames), default=0.0),
+        "max_seam_gap": {s: max(f["seam_gap"][s]["max"] for f in frames) for s in seams},
+        "frames": frames,
+    }

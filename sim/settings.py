@@ -1,0 +1,57 @@
+"""Settings of a cloth simulation (SI units; vectors in the world frame, Z up)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+SOLVERS = ("xpbd", "mass-spring")
+#: Substeps per frame at 30 fps: XPBD needs many small steps to keep the garment from stretching
+#: under its own weight; the implicit mass-spring step converges globally with fewer.
+DEFAULT_SUBSTEPS = {"xpbd": 40, "mass-spring": 10}
+
+
+@dataclass
+class SimSettings:
+    """How the solver steps; material-dependent values (thickness, friction) come from the DART."""
+
+    fps: float = 30.0
+    substeps: int = DEFAULT_SUBSTEPS["xpbd"]  # per frame
+    iterations: int = 2  # XPBD constraint sweeps per substep
+    solver: str = "xpbd"
+    device: str = "cpu"
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)  # m/s^2
+    wind: tuple[float, float, float] = (0.0, 0.0, 0.0)  # m/s
+    gust: float = 0.0  # relative amplitude of the wind's gusts, 0..1
+    air_density: float = 1.2  # kg/m^3; 0 switches wind and air drag off
+    drag_coefficient: float = 1.0
+    damping: float = 0.1  # 1/s, velocity decay rate
+    ground: bool = True  # the plane z = 0
+    contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
+    contact_interval: int = 4  # substeps between closest-point searches
+    max_body_speed: float = 5.0  # m/s the search reach allows for between searches
+    max_speed: float = 50.0  # m/s; faster means the run has blown up
+    cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep
+    seed: int = 0
+
+    def check(self) -> None:
+        """Raise ValueError naming the first setting out of range."""
+        finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
+                                               self.damping, self.contact_reach, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
+        if not finite:
+            raise ValueError("settings must be finite numbers")
+        rules = [
+            (self.fps > 0, f"fps must be > 0, got {self.fps}"),
+            (self.substeps >= 1, f"substeps must be >= 1, got {self.substeps}"),
+            (self.iterations >= 1, f"iterations must be >= 1, got {self.iterations}"),
+            (self.contact_interval >= 1, f"contact interval must be >= 1, got {self.contact_interval}"),
+            (self.cg_iterations >= 1, f"cg iterations must be >= 1, got {self.cg_iterations}"),
+            (self.solver in SOLVERS, f"unknown solver '{self.solver}' (one of {', '.join(SOLVERS)})"),
+            (0 <= self.gust <= 1, f"gust must be in [0, 1], got {self.gust}"),
+            (self.air_density >= 0 and self.drag_coefficient >= 0, "air density and drag must be >= 0"),
+            (self.damping >= 0, f"damping must be >= 0, got {self.damping}"),
+            (self.contact_reach > 0 and self.max_speed > 0, "contact reach and max speed must be > 0"),
+        ]
+        for ok, message in rules:
+            if not ok:
+                raise ValueError(message)

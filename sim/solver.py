@@ -1,0 +1,183 @@
+"""The cloth solver: garment state, the moving body it collides with, and one frame of substeps.
+
+Everything here is in the world frame (Z up, metres, seconds, kilograms). Per frame the body moves
+linearly from its previous frame to the next; every substep places it, refits its BVH, finds each
+particle's closest body point every few substeps (the contact planes ride on the body's velocity
+in between), and the integrator (XPBD or implicit mass-spring) advances the cloth.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from darts.geometry.warp_runtime import warp
+from sim import kernels
+from sim.coloring import color_order
+from sim.model import ClothModel
+from sim.settings import SimSettings
+from sim.wind import Wind
+
+wp = warp()
+
+
+def _vec3(values: np.ndarray, device: str):
+    return wp.array(np.ascontiguousarray(values, np.float32), dtype=wp.vec3, device=device)
+
+
+def _ints(values: np.ndarray, device: str):
+    return wp.array(np.ascontiguousarray(values, np.int32), dtype=wp.int32, device=device)
+
+
+def _floats(values: np.ndarray, device: str):
+    return wp.array(np.ascontiguousarray(values, np.float32), dtype=float, device=device)
+
+
+class ColoredConstraints:
+    """A constraint list on the device, sorted by colour; ``launch`` projects it colour by colour."""
+
+    def __init__(self, members: np.ndarray, fields: dict[str, np.ndarray], particle_count: int, device: str):
+        order, self.offsets = color_order(members, particle_count)
+        self.device = device
+        self.count = len(members)
+        self.members = _ints(np.asarray(members).reshape(len(members), -1)[order], device)
+        self.fields = {}
+        for name, values in fields.items():
+            values = np.asarray(values)[order]
+            self.fields[name] = _ints(values, device) if values.dtype.kind == "i" else _floats(values, device)
+        self.multiplier = wp.zeros(self.count, dtype=float, device=device)
+
+    @property
+    def colors(self) -> int:
+        return len(self.offsets) - 1
+
+    def launch(self, kernel, before: list, after: list) -> None:
+        """``kernel(offset, members, *before, *after)`` over every constraint. The CPU backend runs a
+        launch's threads in order, so one launch over the sorted list equals a launch per colour."""
+        if self.count == 0:
+            return
+        spans = [(0, self.count)] if self.device == "cpu" else zip(self.offsets[:-1], self.offsets[1:])
+        for start, end in spans:
+            wp.launch(kernel, dim=int(end - start), inputs=[int(start), self.members, *before, *after],
+                      device=self.device)
+
+
+def hinge_stiffness(model: ClothModel) -> np.ndarray:
+    """Per-hinge bending stiffness kappa = k_b 3 |e|^2 / (A_1 + A_2) (N m), from the rest shape."""
+    rest = model.rest
+    i, j, k, l = (rest[model.hinges[:, c]] for c in range(4))
+    area1 = 0.5 * np.linalg.norm(np.cross(j - i, k - i), axis=1)
+    area2 = 0.5 * np.linalg.norm(np.cross(l - i, j - i), axis=1)
+    edge2 = np.sum((j - i) ** 2, axis=1)
+    return model.material["bend_stiffness"] * 3.0 * edge2 / np.maximum(area1 + area2, 1e-12)
+
+
+class ClothSolver:
+    """Steps ``model`` (particles at ``positions``, world frame) on a body mesh given frame by frame."""
+
+    def __init__(self, model: ClothModel, positions: np.ndarray, body_faces: np.ndarray,
+                 body_vertices: np.ndarray, settings: SimSettings):
+        settings.check()
+        self.model, self.settings = model, settings
+        self.device = device = settings.device
+        self.count = len(model.rest)
+        self.thickness = float(model.material["thickness"])
+        self.friction = float(model.material["friction"])
+        self.wind = Wind(settings.wind, settings.gust, settings.seed)
+        self.x = _vec3(positions, device)
+        self.v = wp.zeros(self.count, dtype=wp.vec3, device=device)
+        self.x_start = wp.zeros_like(self.x)
+        self.force = wp.zeros_like(self.x)
+        self.mass = _floats(model.mass, device)
+        self.inverse_mass = _floats(1.0 / model.mass, device)
+        self.faces = wp.array(np.ascontiguousarray(model.faces, np.int32), dtype=wp.int32, device=device)
+        self.contact_point = wp.zeros_like(self.x)
+        self.contact_normal = wp.zeros_like(self.x)
+        self.contact_velocity = wp.zeros_like(self.x)
+        self.in_contact = wp.zeros(self.count, dtype=wp.int32, device=device)
+        self.body_push = wp.zeros(self.count, dtype=float, device=device)
+        self.ground_push = wp.zeros(self.count, dtype=float, device=device)
+        self.body_start = _vec3(body_vertices, device)
+        self.body_end = _vec3(body_vertices, device)
+        self.body_points = _vec3(body_vertices, device)
+        self.body_velocities = wp.zeros_like(self.body_points)
+        self.body_indices = _ints(np.asarray(body_faces).reshape(-1), device)
+        self.body = wp.Mesh(points=self.body_points, velocities=self.body_velocities, indices=self.body_indices)
+        self._inside = wp.zeros(1, dtype=wp.int32, device=device)
+        self._max_speed = wp.zeros(1, dtype=float, device=device)
+        self._finite = wp.zeros(1, dtype=wp.int32, device=device)
+        self.time = 0.0
+        self._contact_age = 0.0
+        if settings.solver == "xpbd":
+            from sim.xpbd import XpbdIntegrator
+
+            self.integrator = XpbdIntegrator(self)
+        else:
+            from sim.implicit import MassSpringIntegrator
+
+            self.integrator = MassSpringIntegrator(self)
+
+    # -- pieces the integrators call, in this order, every substep --------------------------------
+    def external_forces(self, time: float) -> None:
+        """force <- wind and air drag on every face (zero when the air density is 0)."""
+        self.force.zero_()
+        if self.settings.air_density > 0:
+            wp.launch(kernels.aerodynamic_forces, dim=len(self.model.faces),
+                      inputs=[self.faces, self.x, self.v, wp.vec3(*self.wind.at(time)), self.settings.air_density,
+                              self.settings.drag_coefficient, self.force], device=self.device)
+
+    def place_body(self, weight: float) -> None:
+        """Body at ``weight`` of the way through the current frame, its BVH refit."""
+        wp.launch(kernels.body_frame, dim=len(self.body_points),
+                  inputs=[self.body_start, self.body_end, weight, self.settings.fps, self.body_points,
+                          self.body_velocities], device=self.device)
+        self.body.refit()
+
+    def update_contacts(self, substep: int, dt: float) -> None:
+        """Every ``contact_interval`` substeps: place the body at the end of this substep and find each
+        particle's closest body point, reaching far enough for the body's motion until the next search."""
+        interval = self.settings.contact_interval
+        if substep % interval == 0:
+            self.place_body((substep + 1) / self.settings.substeps)
+            reach = self.thickness + self.settings.contact_reach + interval * dt * self.settings.max_body_speed
+            wp.launch(kernels.find_contacts, dim=self.count,
+                      inputs=[self.body.id, self.x, reach, self.contact_point, self.contact_normal,
+                              self.contact_velocity, self.in_contact], device=self.device)
+        self._contact_age = (substep % interval) * dt
+
+    def resolve_contacts(self) -> None:
+        """Push particles out of the body and above the ground (one sweep)."""
+        wp.launch(kernels.resolve_contacts, dim=self.count,
+                  inputs=[self.x, self.contact_point, self.contact_normal, self.contact_velocity, self.in_contact,
+                          self._contact_age, self.thickness, int(self.settings.ground), 0.0, self.body_push,
+                          self.ground_push], device=self.device)
+
+    def apply_friction(self, dt: float) -> None:
+        """Coulomb friction for the substep's contact pushes (then forget them)."""
+        wp.launch(kernels.apply_friction, dim=self.count,
+                  inputs=[self.x, self.x_start, self.contact_normal, self.contact_velocity, self.friction, dt,
+                          self.body_push, self.ground_push], device=self.device)
+
+    # -- the public interface ---------------------------------------------------------------------
+    def step_frame(self, body_next: np.ndarray) -> None:
+        """Advance one frame (1 / fps seconds) while the body moves to ``body_next`` [V,3]."""
+        self.body_start, self.body_end = self.body_end, self.body_start
+        self.body_end.assign(np.ascontiguousarray(body_next, np.float32))
+        substeps = self.settings.substeps
+        dt = 1.0 / (self.settings.fps * substeps)
+        for s in range(substeps):
+            self.integrator.substep(dt, self.time + (s + 1) * dt, s)
+        self.time += 1.0 / self.settings.fps
+        self.place_body(1.0)
+
+    def measure(self) -> tuple[float, float, bool]:
+        """(fraction of particles inside the body, max speed m/s, all values finite) right now."""
+        self._inside.zero_()
+        self._max_speed.zero_()
+        self._finite.fill_(1)
+        wp.launch(kernels.frame_measures, dim=self.count,
+                  inputs=[self.body.id, self.x, self.v, self._inside, self._max_speed, self._finite], device=self.device)
+        return (float(self._inside.numpy()[0]) / self.count, float(self._max_speed.numpy()[0]),
+                bool(self._finite.numpy()[0]))
+
+    def positions(self) -> np.ndarray:
+        """Particle positions [P,3] (float64 copy)."""
+        return self.x.numpy().astype(np.float64)
