@@ -70,6 +70,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--wind", type=_vector, default=(0.0, 0.0, 0.0), metavar="X,Y,Z", help="wind in m/s (world frame)")
     p.add_argument("--gust", type=float, default=0.0, help="relative gust strength of the wind, 0..1")
     p.add_argument("--no-ground", action="store_true", help="no ground plane at z = 0")
+    p.add_argument("--max-speed", type=float, default=defaults.max_speed,
+                   help=f"m/s; a faster particle stops the run as unstable (default {defaults.max_speed:g})")
     p.add_argument("--seed", type=int, default=0, help="seed of the wind gusts (runs are deterministic)")
     p.add_argument("--seam-curves", action="store_true", help="USD only: draw each seam pair as a curve")
     p.add_argument("--stats", metavar="stats.json", help="write per-frame measurements as JSON")
@@ -116,7 +118,8 @@ def _fill(writer, args, dart, track) -> None:
 def _settings(args) -> SimSettings:
     substeps = args.substeps if args.substeps is not None else DEFAULT_SUBSTEPS[args.solver]
     settings = SimSettings(fps=args.fps, substeps=substeps, iterations=args.iterations, solver=args.solver,
-                           device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed)
+                           device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed,
+                           max_speed=args.max_speed)
     try:
         settings.check()
     except ValueError as exc:

@@ -2,7 +2,8 @@
 
 Per substep solve (M + h^2 H) dv = h (f + h g M) - h^2 H v with H the stiffness matrix (springs:
 k [n n^T + max(0, 1 - L/l)(I - n n^T)], kept positive semi-definite; hinges: kappa g g^T), by a
-fixed number of Jacobi-preconditioned conjugate-gradient iterations that never leave the device;
+fixed number of Jacobi-preconditioned conjugate-gradient iterations started from free fall,
+dv0 = h g (exact for a garment in free fall), all on the device;
 then x += h v, contacts and friction as in XPBD, v = dx / h.
 """
 from __future__ import annotations
@@ -101,18 +102,26 @@ def add_hinge_product(hinges: wp.array2d(dtype=wp.int32), gradients: wp.array2d(
 
 
 @wp.kernel
-def start_solve(force: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float), gravity: wp.vec3, dt: float,
-                stiffness_v: wp.array(dtype=wp.vec3), diagonal: wp.array(dtype=float), scale: float,
-                residual: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3), direction: wp.array(dtype=wp.vec3),
-                dv: wp.array(dtype=wp.vec3), rz: wp.array(dtype=float)):
-    """b = h (f + M g) - h^2 H v; dv = 0, r = b, z = P^-1 r, p = z, rz = r.z."""
+def gravity_guess(v: wp.array(dtype=wp.vec3), gravity: wp.vec3, dt: float, dv: wp.array(dtype=wp.vec3),
+                  v_guess: wp.array(dtype=wp.vec3)):
+    """Start from free fall, dv0 = h g; v_guess = v + dv0."""
     i = wp.tid()
-    r = dt * (force[i] + mass[i] * gravity) - stiffness_v[i]
+    dv[i] = dt * gravity
+    v_guess[i] = v[i] + dt * gravity
+
+
+@wp.kernel
+def start_solve(force: wp.array(dtype=wp.vec3), dt: float, stiffness_v: wp.array(dtype=wp.vec3),
+                mass: wp.array(dtype=float), diagonal: wp.array(dtype=float), scale: float,
+                residual: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3), direction: wp.array(dtype=wp.vec3),
+                rz: wp.array(dtype=float)):
+    """r = b - A dv0 = h f - h^2 H (v + dv0) (the gravity terms cancel); z = P^-1 r; p = z; rz = r.z."""
+    i = wp.tid()
+    r = dt * force[i] - stiffness_v[i]
     zi = r / (mass[i] + scale * diagonal[i])
     residual[i] = r
     z[i] = zi
     direction[i] = zi
-    dv[i] = wp.vec3(0.0)
     wp.atomic_add(rz, 0, wp.dot(r, zi))
 
 
@@ -207,11 +216,13 @@ class MassSpringIntegrator:
         wp.launch(hinge_forces, dim=self.hinges.shape[0],
                   inputs=[self.hinges, self.rest_angle, self.kappa, s.x, s.force, self.gradients, self.diagonal],
                   device=device)
-        self._stiffness_product(s.v, h2, 0.0)  # h^2 H v
+        wp.launch(gravity_guess, dim=s.count, inputs=[s.v, wp.vec3(*s.settings.gravity), dt, self.dv, self.z],
+                  device=device)
+        self._stiffness_product(self.z, h2, 0.0)  # h^2 H (v + dv0)
         rz = self.scalars[0:1]
         wp.launch(start_solve, dim=s.count,
-                  inputs=[s.force, s.mass, wp.vec3(*s.settings.gravity), dt, self.product, self.diagonal, h2,
-                          self.residual, self.z, self.direction, self.dv, rz], device=device)
+                  inputs=[s.force, dt, self.product, s.mass, self.diagonal, h2, self.residual, self.z, self.direction, rz],
+                  device=device)
         for k in range(s.settings.cg_iterations):
             p_ap, rz_next = self.scalars[2 * k + 1:2 * k + 2], self.scalars[2 * k + 2:2 * k + 3]
             self._stiffness_product(self.direction, h2, 1.0)

@@ -59,40 +59,67 @@ def velocities_from_positions(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtyp
     v[i] = (x[i] - x_start[i]) / dt
 
 
+@wp.func
+def face_frame(mesh: wp.uint64, face: int):
+    """Orthonormal frame of a body face: first edge direction, its in-plane normal, the face normal."""
+    a = wp.mesh_get_point(mesh, face * 3)
+    b = wp.mesh_get_point(mesh, face * 3 + 1)
+    c = wp.mesh_get_point(mesh, face * 3 + 2)
+    n = wp.normalize(wp.cross(b - a, c - a))
+    e1 = wp.normalize(b - a)
+    return e1, wp.cross(n, e1), n
+
+
 @wp.kernel
-def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), reach: float,
-                  contact_point: wp.array(dtype=wp.vec3), contact_normal: wp.array(dtype=wp.vec3),
-                  contact_velocity: wp.array(dtype=wp.vec3), in_contact: wp.array(dtype=wp.int32)):
-    """Closest body point within ``reach`` of each particle, with the outward direction there."""
+def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), reach: float, contact_face: wp.array(dtype=wp.int32),
+                  contact_uv: wp.array(dtype=wp.vec2), contact_local: wp.array(dtype=wp.vec3)):
+    """Closest body point within ``reach`` of each particle (face, barycentrics) and the outward
+    direction there, stored in the face's own frame so that it turns with the face (face -1: none)."""
     i = wp.tid()
     p = x[i]
     query = wp.mesh_query_point_sign_normal(mesh, p, reach)
-    in_contact[i] = 0
+    contact_face[i] = -1
     if query.result:
+        e1, e2, n = face_frame(mesh, query.face)
         c = wp.mesh_eval_position(mesh, query.face, query.u, query.v)
-        n = wp.mesh_eval_face_normal(mesh, query.face)
         gap = wp.length(p - c)
+        out = n
         if gap > 1.0e-6:
-            n = query.sign * (p - c) / gap
-        contact_point[i] = c
-        contact_normal[i] = n
-        contact_velocity[i] = wp.mesh_eval_velocity(mesh, query.face, query.u, query.v)
-        in_contact[i] = 1
+            out = query.sign * (p - c) / gap
+        contact_face[i] = query.face
+        contact_uv[i] = wp.vec2(query.u, query.v)
+        contact_local[i] = wp.vec3(wp.dot(out, e1), wp.dot(out, e2), wp.dot(out, n))
+
+
+@wp.kernel
+def track_contacts(mesh: wp.uint64, contact_face: wp.array(dtype=wp.int32), contact_uv: wp.array(dtype=wp.vec2),
+                   contact_local: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=wp.vec3),
+                   contact_normal: wp.array(dtype=wp.vec3), contact_velocity: wp.array(dtype=wp.vec3)):
+    """Each contact's plane on the body as it is now: the same surface point and the same direction
+    in the face's frame (exact for a face that moves rigidly), with the surface velocity there."""
+    i = wp.tid()
+    face = contact_face[i]
+    if face < 0:
+        return
+    uv = contact_uv[i]
+    local = contact_local[i]
+    e1, e2, n = face_frame(mesh, face)
+    contact_point[i] = wp.mesh_eval_position(mesh, face, uv[0], uv[1])
+    contact_normal[i] = wp.normalize(local[0] * e1 + local[1] * e2 + local[2] * n)
+    contact_velocity[i] = wp.mesh_eval_velocity(mesh, face, uv[0], uv[1])
 
 
 @wp.kernel
 def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=wp.vec3),
-                     contact_normal: wp.array(dtype=wp.vec3), contact_velocity: wp.array(dtype=wp.vec3),
-                     in_contact: wp.array(dtype=wp.int32), elapsed: float, thickness: float, ground: int,
-                     ground_height: float, body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
-    """Move particles to ``thickness`` outside the body's tangent plane at their contact, carried
-    by the body's velocity for the ``elapsed`` seconds since the contact was found (and above the
-    ground plane z = ground_height), adding up how far each was pushed."""
+                     contact_normal: wp.array(dtype=wp.vec3), contact_face: wp.array(dtype=wp.int32),
+                     thickness: float, ground: int, ground_height: float, body_push: wp.array(dtype=float),
+                     ground_push: wp.array(dtype=float)):
+    """Move particles to ``thickness`` outside the body's tangent plane at their contact (and above
+    the ground plane z = ground_height), adding up how far each was pushed."""
     i = wp.tid()
     p = x[i]
-    if in_contact[i] == 1:
-        plane = contact_point[i] + elapsed * contact_velocity[i]
-        depth = thickness - wp.dot(p - plane, contact_normal[i])
+    if contact_face[i] >= 0:
+        depth = thickness - wp.dot(p - contact_point[i], contact_normal[i])
         if depth > 0.0:
             p = p + depth * contact_normal[i]
             body_push[i] = body_push[i] + depth

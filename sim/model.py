@@ -69,10 +69,11 @@ def _anchors(ends: np.ndarray, edges: np.ndarray, on_seam: np.ndarray) -> np.nda
     return first[ends]
 
 
-def collapse_short_edges(points: np.ndarray, faces: np.ndarray, apart: np.ndarray, min_length: float) -> np.ndarray:
+def collapse_short_edges(points: np.ndarray, faces: np.ndarray, pinned: np.ndarray, min_length: float) -> np.ndarray:
     """Group index of each point after collapsing, shortest first, every edge shorter than
     ``min_length`` whose collapse keeps the surface a manifold (link condition, and no corner left
-    with fewer than three neighbours) and does not join the two ends of a pair in ``apart`` [K,2]."""
+    with fewer than three neighbours) and puts at most one of the ``pinned`` points (indices) in a
+    group: a group holding one sits on it, so seam ends stay matched with their partners."""
     neighbours = [set() for _ in range(len(points))]
     for a, b in np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).tolist():
         neighbours[a].add(b)
@@ -82,10 +83,8 @@ def collapse_short_edges(points: np.ndarray, faces: np.ndarray, apart: np.ndarra
         for c in range(3):
             a, b, o = tri[c], tri[(c + 1) % 3], tri[(c + 2) % 3]
             opposite.setdefault((min(a, b), max(a, b)), set()).add(o)
-    partners = [set() for _ in range(len(points))]
-    for a, b in np.asarray(apart).tolist():
-        partners[a].add(b)
-        partners[b].add(a)
+    on_seam = np.zeros(len(points), bool)
+    on_seam[np.asarray(pinned, np.int64)] = True
     members = [{i} for i in range(len(points))]
     group = np.arange(len(points))
     lengths = np.linalg.norm(points[faces[:, [1, 2, 0]]] - points[faces], axis=2).reshape(-1)
@@ -95,7 +94,7 @@ def collapse_short_edges(points: np.ndarray, faces: np.ndarray, apart: np.ndarra
         a, b = group[a], group[b]
         key = (min(a, b), max(a, b))
         if (a == b or key not in opposite or neighbours[a] & neighbours[b] != opposite[key]
-                or any(len(neighbours[o]) < 4 for o in opposite[key]) or partners[a] & members[b]):
+                or any(len(neighbours[o]) < 4 for o in opposite[key]) or (on_seam[a] and on_seam[b])):
             continue
         for n in neighbours[b] - {a}:  # b's edges and faces become a's
             neighbours[n].discard(b)
@@ -112,7 +111,7 @@ def collapse_short_edges(points: np.ndarray, faces: np.ndarray, apart: np.ndarra
         neighbours[a] |= neighbours[b] - {a, b}
         neighbours[a].discard(b)
         members[a] |= members[b]
-        partners[a] |= partners[b]
+        on_seam[a] |= on_seam[b]
         group[list(members[b])] = a
     return np.unique(group, return_inverse=True)[1]
 
@@ -130,13 +129,14 @@ def cloth_model(dart: Dart) -> ClothModel:
     faces = particle[dart.faces]
     sprung = dart.pair_active & ~np.isin(dart.pair_seam, welded_seams)
     edge_lengths = np.linalg.norm(rest[faces[:, [1, 2, 0]]] - rest[faces], axis=2)
-    group = collapse_short_edges(rest, faces, particle[dart.pairs[~np.isin(dart.pair_seam, welded_seams)]],
-                                 SHORT_EDGE_FRACTION * np.median(edge_lengths))
-    particle = group[particle]
-    count = particle.max() + 1
-    rest = np.zeros((count, 3))
-    np.add.at(rest, particle, dart.vertices)
-    rest /= np.bincount(particle, minlength=count)[:, None]
+    seam_ends = np.unique(particle[dart.pairs[~np.isin(dart.pair_seam, welded_seams)]])
+    group = collapse_short_edges(rest, faces, seam_ends, SHORT_EDGE_FRACTION * np.median(edge_lengths))
+    count = group.max() + 1
+    merged = np.zeros((count, 3))
+    np.add.at(merged, group, rest)
+    merged /= np.bincount(group, minlength=count)[:, None]
+    merged[group[seam_ends]] = rest[seam_ends]  # a group with a seam end sits on it
+    particle, rest = group[particle], merged
     faces = particle[dart.faces].astype(np.int64)
     faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])]
     tri = rest[faces]

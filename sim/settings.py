@@ -28,7 +28,7 @@ class SimSettings:
     damping: float = 0.1  # 1/s, velocity decay rate
     ground: bool = True  # the plane z = 0
     contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
-    contact_interval: int = 4  # substeps between closest-point searches
+    contact_interval: int = 2  # substeps between closest-point searches
     max_body_speed: float = 5.0  # m/s the search reach allows for between searches
     max_speed: float = 50.0  # m/s; faster means the run has blown up
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep

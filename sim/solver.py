@@ -2,8 +2,8 @@
 
 Everything here is in the world frame (Z up, metres, seconds, kilograms). Per frame the body moves
 linearly from its previous frame to the next; every substep places it, refits its BVH, finds each
-particle's closest body point every few substeps (the contact planes ride on the body's velocity
-in between), and the integrator (XPBD or implicit mass-spring) advances the cloth.
+particle's closest body point every few substeps (in between, each contact plane follows its body
+face), and the integrator (XPBD or implicit mass-spring) advances the cloth.
 """
 from __future__ import annotations
 
@@ -38,7 +38,8 @@ class ColoredConstraints:
         order, self.offsets = color_order(members, particle_count)
         self.device = device
         self.count = len(members)
-        self.members = _ints(np.asarray(members).reshape(len(members), -1)[order], device)
+        members = np.asarray(members, np.int64)
+        self.members = _ints(members.reshape(len(members), members.shape[1] if members.ndim == 2 else 1)[order], device)
         self.fields = {}
         for name, values in fields.items():
             values = np.asarray(values)[order]
@@ -92,7 +93,9 @@ class ClothSolver:
         self.contact_point = wp.zeros_like(self.x)
         self.contact_normal = wp.zeros_like(self.x)
         self.contact_velocity = wp.zeros_like(self.x)
-        self.in_contact = wp.zeros(self.count, dtype=wp.int32, device=device)
+        self.contact_face = wp.full(self.count, -1, dtype=wp.int32, device=device)
+        self.contact_uv = wp.zeros(self.count, dtype=wp.vec2, device=device)
+        self.contact_local = wp.zeros_like(self.x)
         self.body_push = wp.zeros(self.count, dtype=float, device=device)
         self.ground_push = wp.zeros(self.count, dtype=float, device=device)
         self.body_start = _vec3(body_vertices, device)
@@ -105,7 +108,6 @@ class ClothSolver:
         self._max_speed = wp.zeros(1, dtype=float, device=device)
         self._finite = wp.zeros(1, dtype=wp.int32, device=device)
         self.time = 0.0
-        self._contact_age = 0.0
         if settings.solver == "xpbd":
             from sim.xpbd import XpbdIntegrator
 
@@ -124,31 +126,35 @@ class ClothSolver:
                       inputs=[self.faces, self.x, self.v, wp.vec3(*self.wind.at(time)), self.settings.air_density,
                               self.settings.drag_coefficient, self.force], device=self.device)
 
-    def place_body(self, weight: float) -> None:
-        """Body at ``weight`` of the way through the current frame, its BVH refit."""
+    def place_body(self, weight: float, refit: bool = True) -> None:
+        """Body at ``weight`` of the way through the current frame (its BVH refit if ``refit``)."""
         wp.launch(kernels.body_frame, dim=len(self.body_points),
                   inputs=[self.body_start, self.body_end, weight, self.settings.fps, self.body_points,
                           self.body_velocities], device=self.device)
-        self.body.refit()
+        if refit:
+            self.body.refit()
 
     def update_contacts(self, substep: int, dt: float) -> None:
-        """Every ``contact_interval`` substeps: place the body at the end of this substep and find each
-        particle's closest body point, reaching far enough for the body's motion until the next search."""
+        """Place the body at the end of this substep; every ``contact_interval`` substeps search each
+        particle's closest body point (reaching far enough for the body's motion until the next
+        search); then put every contact plane where its body face is now."""
         interval = self.settings.contact_interval
-        if substep % interval == 0:
-            self.place_body((substep + 1) / self.settings.substeps)
+        search = substep % interval == 0
+        self.place_body((substep + 1) / self.settings.substeps, refit=search)
+        if search:
             reach = self.thickness + self.settings.contact_reach + interval * dt * self.settings.max_body_speed
             wp.launch(kernels.find_contacts, dim=self.count,
-                      inputs=[self.body.id, self.x, reach, self.contact_point, self.contact_normal,
-                              self.contact_velocity, self.in_contact], device=self.device)
-        self._contact_age = (substep % interval) * dt
+                      inputs=[self.body.id, self.x, reach, self.contact_face, self.contact_uv, self.contact_local],
+                      device=self.device)
+        wp.launch(kernels.track_contacts, dim=self.count,
+                  inputs=[self.body.id, self.contact_face, self.contact_uv, self.contact_local, self.contact_point,
+                          self.contact_normal, self.contact_velocity], device=self.device)
 
     def resolve_contacts(self) -> None:
         """Push particles out of the body and above the ground (one sweep)."""
         wp.launch(kernels.resolve_contacts, dim=self.count,
-                  inputs=[self.x, self.contact_point, self.contact_normal, self.contact_velocity, self.in_contact,
-                          self._contact_age, self.thickness, int(self.settings.ground), 0.0, self.body_push,
-                          self.ground_push], device=self.device)
+                  inputs=[self.x, self.contact_point, self.contact_normal, self.contact_face, self.thickness,
+                          int(self.settings.ground), 0.0, self.body_push, self.ground_push], device=self.device)
 
     def apply_friction(self, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""

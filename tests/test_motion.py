@@ -13,7 +13,7 @@ from darts.motion.amass import load_motion
 from darts.motion.posing import pose_sequence
 from darts.motion.resample import resample, slerp_rotvecs
 from scenes import MOTIONS_DIR, shipped_motions
-from tests.helpers import random_motion_arrays
+from tests.helpers import random_motion_arrays, write_classic_amass_120fps
 
 SHIPPED = ["walk", "run", "wave", "jumping_jacks", "twist", "squat"]
 
@@ -76,11 +76,7 @@ def test_slerp_halfway_and_resample_keeps_duration(tmp_path):
 
 def test_classic_smplh_file_at_120_fps_poses_and_resamples_without_nan(body, tmp_path, run_darts):
     """A classic AMASS file: 120.00004577 fps, dmpls, bytes gender, resampled to 30 fps."""
-    source = load_motion(MOTIONS_DIR / "run.npz")
-    fine = resample(source, 120.00004577)
-    save_npz(tmp_path / "amass_120.npz", poses=np.concatenate([fine.body_pose, fine.hand_pose], 1).reshape(fine.num_frames, -1),
-             trans=fine.trans, betas=np.zeros(16), gender=np.array(b"male"), dmpls=np.zeros((fine.num_frames, 8)),
-             mocap_framerate=np.array(120.00004577))
+    write_classic_amass_120fps(MOTIONS_DIR / "run.npz", tmp_path / "amass_120.npz")
     code, out, err = run_darts("body", "pose", tmp_path / "amass_120.npz", "-o", tmp_path / "posed.npz", "--fps", 30)
     assert code == 0, err
     posed = np.load(tmp_path / "posed.npz")
