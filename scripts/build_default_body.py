@@ -14,7 +14,6 @@ import argparse
 import fnmatch
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 import torch

@@ -1,4 +1,4 @@
-"""Render the figures of docs/body.md, docs/motions.md and docs/templates.md.
+"""Render the figures of docs/body.md, docs/motions.md, docs/templates.md and docs/simulation.md.
 
 Flat-shaded meshes drawn with the painter's algorithm, orthographic views.
 """
@@ -82,12 +82,57 @@ def garments_figure(out: Path) -> None:
     plt.close(fig)
 
 
+def simulation_figure(out: Path, scenes: list[tuple[str, str]], times: list[float]) -> None:
+    """Garments simulated by darts-sim's solver (default settings), a few frames of each."""
+    from darts.dart.export import panel_colors
+    from darts.dart.io import load_dart
+    from scenes import GARMENTS_DIR
+    from sim.body_track import build_body_track
+    from sim.run import simulate
+    from sim.settings import SimSettings
+
+    body = load_body()
+    fig, axes = plt.subplots(len(scenes), len(times), figsize=(2.4 * len(times), 3.0 * len(scenes)))
+    for row, (garment, motion_name) in enumerate(scenes):
+        dart = load_dart(GARMENTS_DIR / f"{garment}.npz")
+        motion = load_motion(MOTIONS_DIR / f"{motion_name}.npz")
+        track = build_body_track(body, motion, 30.0, 0.5)
+        wanted = {int(round(t * 30.0)): col for col, t in enumerate(times)}
+        frames: list = []
+
+        def keep(garment_points, body_points):
+            frames.append((garment_points, body_points) if len(frames) in wanted else None)
+
+        simulate(dart, track, SimSettings(), keep)
+        faces = np.concatenate([body.faces, dart.faces + body.num_vertices])
+        colors = np.concatenate([np.full((len(body.faces), 3), 0.8), panel_colors(len(dart.panel_names))[dart.panel]])
+        right = np.array([np.cos(0.6), np.sin(0.6), 0.0])  # front-left view; the body faces -Y
+        for frame, col in wanted.items():
+            garment_points, body_points = frames[frame]
+            centre = np.array([*motion.trans[min(frame, motion.num_frames - 1), :2], 0.0])
+            points = np.concatenate([body_points, garment_points]) - centre
+            ax = axes[row, col]
+            draw_mesh(ax, points, faces, colors, right, np.array([0, 0, 1.0]))
+            ax.set_xlim(-0.9, 0.9)
+            ax.set_ylim(-0.05, 2.0)
+            ax.set_title(f"{garment}, {motion_name} {frame / 30.0:.1f} s", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=70)
+    plt.close(fig)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output-dir", default="docs/images")
+    parser.add_argument("--simulation", action="store_true", help="only the simulation figure (runs the solver)")
     args = parser.parse_args()
     out = Path(args.output_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if args.simulation:
+        simulation_figure(out / "simulation.png", [("short-sleeve-top", "walk"), ("tshirt-collar-tie", "wave"),
+                                                   ("short-skirt", "run"), ("long-pants", "squat")], [0.0, 1.0, 2.0, 3.0])
+        print(f"wrote {out}/simulation.png")
+        return
     body_figure(out / "default_body.png")
     motions_figure(out / "motions.png", ["walk", "run", "wave", "jumping_jacks", "twist", "squat"])
     garments_figure(out / "garments.png")

@@ -1,7 +1,8 @@
 """The cloth model the solver steps, built from a DART (canonical frame, metres, kilograms).
 
 - particles: DART vertices, with the two ends of every *welded* seam pair merged into one;
-- mass: lumped areal density, m_i = density * sum of (area / 3) of the faces around particle i;
+- mass: lumped areal density, m_i = density * sum of (area / 3) of the faces around particle i
+  (at least the lightest such mass);
 - stretch: one distance constraint per mesh edge, at its rest length;
 - bending: one hinge (i, j shared edge; k, l opposite vertices) per interior edge, with its rest
   dihedral angle;
@@ -143,6 +144,9 @@ def cloth_model(dart: Dart) -> ClothModel:
     area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     mass = np.zeros(count)
     np.add.at(mass, faces.reshape(-1), np.repeat(area / 3.0 * dart.material["density"], 3))
+    # A particle whose only faces have no area (two seam ends meeting at a seam's end, say) still
+    # needs a mass; it takes the lightest one found elsewhere.
+    mass[mass <= 0] = mass[mass > 0].min()
     edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
     hinges = _hinges(faces)
     seam_of = dart.pair_seam[sprung]

@@ -1,7 +1,6 @@
 """Shared fixtures: the bundled body, and helpers to run the CLIs (darts, darts-sim) in-process."""
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from darts.body.io import load_body

@@ -72,3 +72,16 @@ def test_dihedral_angle_of_a_right_angle_fold():
     flat = points.copy()
     flat[3] = [0.5, -1, 0]
     assert np.isclose(dihedral_angles(flat, hinge)[0], 0.0)
+
+
+@pytest.mark.parametrize("regime", ["welded", "stiff"])
+def test_every_shipped_garment_gives_a_sound_model(regime):
+    """Every particle has a mass and every constraint a finite rest state, whichever regime the
+    seams take (welding a collar once left a particle with only zero-area faces)."""
+    for path in sorted(GARMENTS.glob("*.npz")):
+        dart = load_dart(path)
+        dart.set_seam("all", regime)
+        model = cloth_model(dart)
+        assert model.mass.min() > 0, path.stem
+        assert np.isfinite(model.hinge_rest_angle).all() and np.isfinite(model.edge_rest).all(), path.stem
+        assert np.bincount(model.faces.reshape(-1), minlength=len(model.rest)).min() > 0, path.stem

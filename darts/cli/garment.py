@@ -1,7 +1,6 @@
 """``darts template``, ``darts inspect`` and ``darts export``: making, describing and exporting DARTs."""
 from __future__ import annotations
 
-import argparse
 import json
 
 import numpy as np
