@@ -109,7 +109,7 @@ def simulation_figure(out: Path, scenes: list[tuple[str, str]], times: list[floa
         right = np.array([np.cos(0.6), np.sin(0.6), 0.0])  # front-left view; the body faces -Y
         for frame, col in wanted.items():
             garment_points, body_points = frames[frame]
-            centre = np.array([*motion.trans[min(frame, motion.num_frames - 1), :2], 0.0])
+            centre = np.array([*body_points[:, :2].mean(0), 0.0])
             points = np.concatenate([body_points, garment_points]) - centre
             ax = axes[row, col]
             draw_mesh(ax, points, faces, colors, right, np.array([0, 0, 1.0]))

@@ -247,7 +247,9 @@ def frame_measures(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), v: wp.array(dtyp
                    inside: wp.array(dtype=wp.int32), max_speed: wp.array(dtype=float),
                    finite: wp.array(dtype=wp.int32)):
     """Per frame: particles inside the body (sign by the angle-weighted pseudo-normal at the closest
-    point, exact for a closed body that does not intersect itself), the largest speed, any non-finite value."""
+    point, exact for a closed body that does not intersect itself) in inside[0], those of them whose
+    closest body point lies inside another part of the body (3 mm out along its normal is still
+    inside: the posed body overlaps itself there) in inside[1], the largest speed, any non-finite value."""
     i = wp.tid()
     p = x[i]
     vi = v[i]
@@ -257,4 +259,9 @@ def frame_measures(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), v: wp.array(dtyp
     query = wp.mesh_query_point_sign_normal(mesh, p, 10.0)
     if query.result and query.sign < 0.0:
         wp.atomic_add(inside, 0, 1)
+        probe = wp.mesh_eval_position(mesh, query.face, query.u, query.v) + 0.003 * wp.mesh_eval_face_normal(mesh, query.face)
+        again = wp.mesh_query_point_sign_normal(mesh, probe, 10.0)
+        if again.result and again.sign < 0.0:
+            wp.atomic_add(inside, 1, 1)
     wp.atomic_max(max_speed, 0, wp.length(vi))
+

@@ -64,11 +64,11 @@ def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
             solver.step_frame(track.vertices[k])
             result.simulated_frames += 1
             bar.update(1)
-        penetration, max_speed, finite = solver.measure()
+        measure = solver.measure()
         phase = "settle" if k < track.settle_frames else "frame"
         index = k if k < track.settle_frames else k - track.settle_frames
-        if not finite or max_speed > settings.max_speed:
-            what = "a non-finite position or velocity" if not finite else f"a particle at {max_speed:.1f} m/s"
+        if not measure.finite or measure.max_speed > settings.max_speed:
+            what = "a non-finite position or velocity" if not measure.finite else f"a particle at {measure.max_speed:.1f} m/s"
             result.stable = False
             result.message = (f"unstable at {phase} {index}: {what} (limit {settings.max_speed:g} m/s); "
                               f"kept the {len(result.frames)} good frames before it")
@@ -76,8 +76,9 @@ def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
         if k < track.settle_frames:
             continue
         vertices = solver.positions()[model.particle_of_vertex]
-        result.frames.append({"penetration": penetration, "max_speed": max_speed,
-                              "seam_gap": seam_gap_stats(dart, vertices)})
+        result.frames.append({"penetration": measure.penetration,
+                              "penetration_in_body_overlap": measure.penetration_in_body_overlap,
+                              "max_speed": measure.max_speed, "seam_gap": seam_gap_stats(dart, vertices)})
         if sink is not None:
             sink(vertices, track.vertices[k])
     bar.close()
@@ -96,6 +97,8 @@ def summary(result: RunResult, settings: SimSettings, vertices: int) -> dict:
         "sim_fps": result.simulated_frames / result.wall_seconds if result.wall_seconds > 0 else 0.0,
         "stable": result.stable, "message": result.message,
         "max_penetration": max((f["penetration"] for f in frames), default=0.0),
+        "max_penetration_outside_body_overlap": max((f["penetration"] - f["penetration_in_body_overlap"] for f in frames),
+                                                    default=0.0),
         "max_speed": max((f["max_speed"] for f in frames), default=0.0),
         "max_seam_gap": {s: max(f["seam_gap"][s]["max"] for f in frames) for s in seams},
         "frames": frames,

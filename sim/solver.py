@@ -1,11 +1,13 @@
 """The cloth solver: garment state, the moving body it collides with, and one frame of substeps.
 
 Everything here is in the world frame (Z up, metres, seconds, kilograms). Per frame the body moves
-linearly from its previous frame to the next; every substep places it, refits its BVH, finds each
-particle's closest body point every few substeps (in between, each contact plane follows its body
-face), and the integrator (XPBD or implicit mass-spring) advances the cloth.
+linearly from its previous frame to the next. Every substep places it; every few substeps its BVH
+is refit and each particle's closest body point searched (in between, each contact plane follows
+its body face); the integrator (XPBD or implicit mass-spring) advances the cloth.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,19 +48,27 @@ class ColoredConstraints:
             self.fields[name] = _ints(values, device) if values.dtype.kind == "i" else _floats(values, device)
         self.multiplier = wp.zeros(self.count, dtype=float, device=device)
 
-    @property
-    def colors(self) -> int:
-        return len(self.offsets) - 1
-
-    def launch(self, kernel, before: list, after: list) -> None:
-        """``kernel(offset, members, *before, *after)`` over every constraint. The CPU backend runs a
+    def launch(self, kernel, fields: list, state: list) -> None:
+        """``kernel(offset, members, *fields, *state)`` over every constraint. The CPU backend runs a
         launch's threads in order, so one launch over the sorted list equals a launch per colour."""
         if self.count == 0:
             return
         spans = [(0, self.count)] if self.device == "cpu" else zip(self.offsets[:-1], self.offsets[1:])
         for start, end in spans:
-            wp.launch(kernel, dim=int(end - start), inputs=[int(start), self.members, *before, *after],
+            wp.launch(kernel, dim=int(end - start), inputs=[int(start), self.members, *fields, *state],
                       device=self.device)
+
+
+@dataclass
+class FrameMeasure:
+    """Fractions of particles inside the body — all, and those where the posed body overlaps
+    itself (armpits, a deep squat) so that no place outside it exists — the largest speed (m/s),
+    and whether every value is finite."""
+
+    penetration: float
+    penetration_in_body_overlap: float
+    max_speed: float
+    finite: bool
 
 
 def hinge_stiffness(model: ClothModel) -> np.ndarray:
@@ -104,7 +114,7 @@ class ClothSolver:
         self.body_velocities = wp.zeros_like(self.body_points)
         self.body_indices = _ints(np.asarray(body_faces).reshape(-1), device)
         self.body = wp.Mesh(points=self.body_points, velocities=self.body_velocities, indices=self.body_indices)
-        self._inside = wp.zeros(1, dtype=wp.int32, device=device)
+        self._inside = wp.zeros(2, dtype=wp.int32, device=device)
         self._max_speed = wp.zeros(1, dtype=float, device=device)
         self._finite = wp.zeros(1, dtype=wp.int32, device=device)
         self.time = 0.0
@@ -174,15 +184,16 @@ class ClothSolver:
         self.time += 1.0 / self.settings.fps
         self.place_body(1.0)
 
-    def measure(self) -> tuple[float, float, bool]:
-        """(fraction of particles inside the body, max speed m/s, all values finite) right now."""
+    def measure(self) -> FrameMeasure:
+        """What ``FrameMeasure`` holds, right now."""
         self._inside.zero_()
         self._max_speed.zero_()
         self._finite.fill_(1)
         wp.launch(kernels.frame_measures, dim=self.count,
                   inputs=[self.body.id, self.x, self.v, self._inside, self._max_speed, self._finite], device=self.device)
-        return (float(self._inside.numpy()[0]) / self.count, float(self._max_speed.numpy()[0]),
-                bool(self._finite.numpy()[0]))
+        inside = self._inside.numpy()
+        return FrameMeasure(float(inside[0]) / self.count, float(inside[1]) / self.count,
+                            float(self._max_speed.numpy()[0]), bool(self._finite.numpy()[0]))
 
     def positions(self) -> np.ndarray:
         """Particle positions [P,3] (float64 copy)."""
