@@ -13,12 +13,13 @@ from pathlib import Path
 import numpy as np
 
 from darts.errors import DartsInputError
+from exporters.streaming import StreamingWriter
 
 SEQUENCE_FORMATS = ("obj", "ply")
 _FRAME_FILE = re.compile(r"^[A-Za-z0-9_]+_\d{4,}\.(obj|ply)$")
 
 
-class MeshSequenceWriter:
+class MeshSequenceWriter(StreamingWriter):
     """``add_mesh`` each mesh once, ``write_frame`` per frame (``NAME_0000.obj``, ...), then ``close``."""
 
     def __init__(self, directory, fps: float, file_format: str = "obj"):
@@ -57,12 +58,5 @@ class MeshSequenceWriter:
             shutil.rmtree(self.path)
         self._tmp.rename(self.path)
 
-    def __enter__(self):
-        return self
-
-    def __exit__(self, kind, value, traceback):
-        if kind is None:
-            self.close()
-        else:
-            shutil.rmtree(self._tmp, ignore_errors=True)
-        return False
+    def discard(self) -> None:
+        shutil.rmtree(self._tmp, ignore_errors=True)

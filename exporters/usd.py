@@ -16,6 +16,7 @@ import numpy as np
 
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path
+from exporters.streaming import StreamingWriter
 
 USD_SUFFIXES = (".usd", ".usda", ".usdc")
 
@@ -32,7 +33,7 @@ def _safe_name(name: str) -> str:
     return cleaned if cleaned and not cleaned[0].isdigit() else f"_{cleaned}"
 
 
-class UsdAnimationWriter:
+class UsdAnimationWriter(StreamingWriter):
     """Write animated meshes: ``add_mesh`` each once, ``write_frame`` per frame, then ``close``.
 
     Use as a context manager; if the block raises, nothing is left at ``path``.
@@ -111,16 +112,10 @@ class UsdAnimationWriter:
         self.stage = None
         self._stack.close()
 
-    def __enter__(self):
-        return self
-
-    def __exit__(self, kind, value, traceback):
-        if kind is None:
-            self.close()
-        else:
-            self.stage = None
-            self._stack.__exit__(kind, value, traceback)
-        return False
+    def discard(self) -> None:
+        """Drop the stage and the temporary file."""
+        self.stage = None
+        self._stack.__exit__(RuntimeError, None, None)
 
 
 def validate_usd(path: str | os.PathLike) -> list[str]:

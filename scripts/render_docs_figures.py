@@ -38,6 +38,15 @@ def body_figure(out: Path) -> None:
     plt.close(fig)
 
 
+def draw_world_front_left(ax, points, faces, colors, half_width: float, top: float, title: str, fontsize: int) -> None:
+    """A posed scene (AMASS world, Z up, the body facing -Y) seen from the front-left."""
+    right = np.array([np.cos(0.6), np.sin(0.6), 0.0])
+    draw_mesh(ax, points, faces, colors, right, np.array([0, 0, 1.0]))
+    ax.set_xlim(-half_width, half_width)
+    ax.set_ylim(-0.05, top)
+    ax.set_title(title, fontsize=fontsize)
+
+
 def motions_figure(out: Path, names: list[str], frames_per_motion: int = 5) -> None:
     body = load_body()
     fig, axes = plt.subplots(len(names), frames_per_motion, figsize=(2.2 * frames_per_motion, 2.6 * len(names)))
@@ -49,13 +58,8 @@ def motions_figure(out: Path, names: list[str], frames_per_motion: int = 5) -> N
         for col, frame in enumerate(np.minimum(np.round(np.array(times) * motion.fps).astype(int), motion.num_frames - 1)):
             ax = axes[row, col]
             centred = vertices[frame] - [motion.trans[frame, 0], motion.trans[frame, 1], 0]
-            # Seen from the front-left (the body faces -Y in the AMASS world).
-            right = np.array([np.cos(0.6), np.sin(0.6), 0.0])
-            draw_mesh(ax, centred, body.faces, grey, right, np.array([0, 0, 1.0]))
+            draw_world_front_left(ax, centred, body.faces, grey, 1.0, 2.3, f"{name} {frame / motion.fps:.1f} s", 9)
             ax.plot([-0.9, 0.9], [0, 0], color="k", lw=0.8)
-            ax.set_xlim(-1.0, 1.0)
-            ax.set_ylim(-0.05, 2.3)
-            ax.set_title(f"{name} {frame / motion.fps:.1f} s", fontsize=9)
     fig.tight_layout()
     fig.savefig(out, dpi=70)
     plt.close(fig)
@@ -106,16 +110,12 @@ def simulation_figure(out: Path, scenes: list[tuple[str, str]], times: list[floa
         simulate(dart, track, SimSettings(), keep)
         faces = np.concatenate([body.faces, dart.faces + body.num_vertices])
         colors = np.concatenate([np.full((len(body.faces), 3), 0.8), panel_colors(len(dart.panel_names))[dart.panel]])
-        right = np.array([np.cos(0.6), np.sin(0.6), 0.0])  # front-left view; the body faces -Y
         for frame, col in wanted.items():
             garment_points, body_points = frames[frame]
             centre = np.array([*body_points[:, :2].mean(0), 0.0])
             points = np.concatenate([body_points, garment_points]) - centre
-            ax = axes[row, col]
-            draw_mesh(ax, points, faces, colors, right, np.array([0, 0, 1.0]))
-            ax.set_xlim(-0.9, 0.9)
-            ax.set_ylim(-0.05, 2.0)
-            ax.set_title(f"{garment}, {motion_name} {frame / 30.0:.1f} s", fontsize=8)
+            draw_world_front_left(axes[row, col], points, faces, colors, 0.9, 2.0,
+                                  f"{garment}, {motion_name} {frame / 30.0:.1f} s", 8)
     fig.tight_layout()
     fig.savefig(out, dpi=70)
     plt.close(fig)

@@ -55,11 +55,7 @@ def hinge_forces(hinges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=
         gj = wp.vec3(0.0)
         gk = wp.vec3(0.0)
         gl = wp.vec3(0.0)
-    c = angle - rest_angle[h]
-    if c > wp.pi:
-        c = c - 2.0 * wp.pi
-    if c < -wp.pi:
-        c = c + 2.0 * wp.pi
+    c = kernels.angle_error(angle, rest_angle[h])
     gradients[h, 0] = gi
     gradients[h, 1] = gj
     gradients[h, 2] = gk

@@ -214,6 +214,17 @@ def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3):
     return angle, gi, gj, gk, gl, 1
 
 
+@wp.func
+def angle_error(angle: float, rest: float):
+    """angle - rest, wrapped into [-pi, pi]."""
+    c = angle - rest
+    if c > wp.pi:
+        c = c - 2.0 * wp.pi
+    if c < -wp.pi:
+        c = c + 2.0 * wp.pi
+    return c
+
+
 @wp.kernel
 def solve_bending(offset: int, hinges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=float),
                   compliance: wp.array(dtype=float), inverse_mass: wp.array(dtype=float), dt: float,
@@ -224,11 +235,7 @@ def solve_bending(offset: int, hinges: wp.array2d(dtype=wp.int32), rest_angle: w
     angle, gi, gj, gk, gl, ok = dihedral_gradient(x[i], x[j], x[k], x[l])
     if ok == 0:
         return
-    c = angle - rest_angle[h]
-    if c > wp.pi:
-        c = c - 2.0 * wp.pi
-    if c < -wp.pi:
-        c = c + 2.0 * wp.pi
+    c = angle_error(angle, rest_angle[h])
     wi, wj, wk, wl = inverse_mass[i], inverse_mass[j], inverse_mass[k], inverse_mass[l]
     weight = wi * wp.dot(gi, gi) + wj * wp.dot(gj, gj) + wk * wp.dot(gk, gk) + wl * wp.dot(gl, gl)
     alpha = compliance[h] / (dt * dt)
