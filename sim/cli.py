@@ -21,6 +21,7 @@ from darts.errors import DartsInputError
 from darts.fileio import atomic_path
 from darts.motion.amass import load_motion
 from darts.motion.resample import resample
+from darts.preview import PREVIEW_SUFFIXES, Animation, frames_to_draw, render_preview
 from exporters.sequence import SEQUENCE_FORMATS, MeshSequenceWriter
 from exporters.usd import USD_SUFFIXES, UsdAnimationWriter
 from scenes import resolve_garment, resolve_motion
@@ -70,11 +71,14 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--wind", type=_vector, default=(0.0, 0.0, 0.0), metavar="X,Y,Z", help="wind in m/s (world frame)")
     p.add_argument("--gust", type=float, default=0.0, help="relative gust strength of the wind, 0..1")
     p.add_argument("--no-ground", action="store_true", help="no ground plane at z = 0")
+    p.add_argument("--no-self-contact", action="store_true", help="let the garment pass through itself (faster)")
     p.add_argument("--max-speed", type=float, default=defaults.max_speed,
                    help=f"m/s; a faster particle stops the run as unstable (default {defaults.max_speed:g})")
     p.add_argument("--seed", type=int, default=0, help="seed of the wind gusts (runs are deterministic)")
     p.add_argument("--seam-curves", action="store_true", help="USD only: draw each seam pair as a curve")
     p.add_argument("--stats", metavar="stats.json", help="write per-frame measurements as JSON")
+    p.add_argument("--preview", metavar="PREVIEW", help="also render preview.gif, .mp4 (needs ffmpeg) or .png "
+                                                        "(body and garment, shaded, fixed camera)")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     return p
 
@@ -115,11 +119,35 @@ def _fill(writer, args, dart, track) -> None:
         writer.add_curves("garment", dart.pairs)
 
 
+class _PreviewFrames:
+    """The frames a ``--preview`` will draw, kept (float32) as they are written; nothing else is kept."""
+
+    def __init__(self, args, track):
+        self.total = len(track.vertices) - track.settle_frames
+        self.wanted = set(frames_to_draw(self.total, args.preview).tolist()) if args.preview else set()
+        self.seen, self.numbers, self.garment, self.body = 0, [], [], []
+
+    def __call__(self, garment: np.ndarray, body: np.ndarray) -> None:
+        if self.seen in self.wanted:
+            self.numbers.append(self.seen)
+            self.garment.append(garment.astype(np.float32))
+            self.body.append(body.astype(np.float32))
+        self.seen += 1
+
+    def render(self, args, dart, track) -> None:
+        animation = Animation(faces={"body": np.asarray(track.faces), "garment": dart.faces},
+                              colors={"body": np.full((len(track.faces), 3), 0.8),
+                                      "garment": panel_colors(len(dart.panel_names))[dart.panel]},
+                              frames={"garment": np.stack(self.garment), "body": np.stack(self.body)},
+                              fps=args.fps, numbers=np.array(self.numbers), total=self.seen)
+        render_preview(animation, args.preview, progress=not args.quiet)
+
+
 def _settings(args) -> SimSettings:
     substeps = args.substeps if args.substeps is not None else DEFAULT_SUBSTEPS[args.solver]
     settings = SimSettings(fps=args.fps, substeps=substeps, iterations=args.iterations, solver=args.solver,
                            device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed,
-                           max_speed=args.max_speed)
+                           max_speed=args.max_speed, self_contact=not args.no_self_contact)
     try:
         settings.check()
     except ValueError as exc:
@@ -132,6 +160,8 @@ def _settings(args) -> SimSettings:
 def _main(argv: list[str] | None) -> int:
     args = parser().parse_args(argv)
     settings = _settings(args)
+    if args.preview and Path(args.preview).suffix.lower() not in PREVIEW_SUFFIXES:
+        raise DartsInputError(args.preview, f"preview must end in {', '.join(PREVIEW_SUFFIXES)}")
     dart = load_dart(resolve_garment(args.garment))
     if args.material:
         dart.material_name, dart.material = args.material, dict(MATERIALS[args.material])
@@ -147,15 +177,21 @@ def _main(argv: list[str] | None) -> int:
         _check_device(args.device)
     track = build_body_track(body, motion, args.fps, args.settle, progress=not args.quiet)
 
+    preview = _PreviewFrames(args, track)
     try:
         with _writer(args) as writer:
             _fill(writer, args, dart, track)
-            result = simulate(dart, track, settings, lambda g, b: writer.write_frame({"garment": g, "body": b}),
-                              progress=not args.quiet)
+            def write(garment: np.ndarray, body: np.ndarray) -> None:
+                writer.write_frame({"garment": garment, "body": body})
+                preview(garment, body)
+
+            result = simulate(dart, track, settings, write, progress=not args.quiet)
             if not result.frames:
                 raise _NothingToKeep(result)
     except _NothingToKeep as nothing:
         result = nothing.result
+    if args.preview and result.frames:
+        preview.render(args, dart, track)
     stats = summary(result, settings, len(dart.vertices))
     if args.stats:
         with atomic_path(args.stats) as tmp:

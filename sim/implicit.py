@@ -175,12 +175,10 @@ class MassSpringIntegrator:
     def __init__(self, solver: ClothSolver):
         model, device = solver.model, solver.device
         self.solver = solver
-        sprung = model.spring_stiffness > 0
-        pairs = np.concatenate([model.edges, model.springs[sprung]]).astype(np.int32)
+        pairs, rest, stiffness = model.springs_and_edges()
         self.pairs = wp.array(pairs, dtype=wp.int32, device=device)
-        self.rest = wp.array(np.concatenate([model.edge_rest, model.spring_rest[sprung]]).astype(np.float32), device=device)
-        self.stiffness = wp.array(np.concatenate([np.full(len(model.edges), model.material["stretch_stiffness"]),
-                                                  model.spring_stiffness[sprung]]).astype(np.float32), device=device)
+        self.rest = wp.array(rest.astype(np.float32), device=device)
+        self.stiffness = wp.array(stiffness.astype(np.float32), device=device)
         self.hinges = wp.array(model.hinges.astype(np.int32), dtype=wp.int32, device=device)
         self.rest_angle = wp.array(model.hinge_rest_angle.astype(np.float32), device=device)
         self.kappa = wp.array(hinge_stiffness(model).astype(np.float32), device=device)

@@ -40,6 +40,16 @@ class ClothModel:
     seam_names: list[str]
     material: dict
 
+    def springs_and_edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every elastic pair: the edges (the material's stretch stiffness) then the sprung seam
+        pairs (their seam's stiffness) as pairs [N,2] int32, rest lengths [N] and stiffnesses [N] (N/m)."""
+        sprung = self.spring_stiffness > 0
+        pairs = np.concatenate([self.edges, self.springs[sprung]]).astype(np.int32)
+        rest = np.concatenate([self.edge_rest, self.spring_rest[sprung]])
+        stiffness = np.concatenate([np.full(len(self.edges), float(self.material["stretch_stiffness"])),
+                                    self.spring_stiffness[sprung]])
+        return pairs, rest, stiffness
+
 
 def dihedral_angles(points: np.ndarray, hinges: np.ndarray) -> np.ndarray:
     """Signed angle between the normals of triangles (i, j, k) and (j, i, l), 0 when flat."""

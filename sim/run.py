@@ -71,14 +71,15 @@ def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
             what = "a non-finite position or velocity" if not measure.finite else f"a particle at {measure.max_speed:.1f} m/s"
             result.stable = False
             result.message = (f"unstable at {phase} {index}: {what} (limit {settings.max_speed:g} m/s); "
-                              f"kept the {len(result.frames)} good frames before it")
+                              f"{solver.diagnose()}; kept the {len(result.frames)} good frames before it")
             break
         if k < track.settle_frames:
             continue
         vertices = solver.positions()[model.particle_of_vertex]
         result.frames.append({"penetration": measure.penetration,
                               "penetration_in_body_overlap": measure.penetration_in_body_overlap,
-                              "max_speed": measure.max_speed, "seam_gap": seam_gap_stats(dart, vertices)})
+                              "max_speed": measure.max_speed, "self_intersections": measure.self_intersections,
+                              "seam_gap": seam_gap_stats(dart, vertices)})
         if sink is not None:
             sink(vertices, track.vertices[k])
     bar.close()
@@ -100,6 +101,8 @@ def summary(result: RunResult, settings: SimSettings, vertices: int) -> dict:
         "max_penetration_outside_body_overlap": max((f["penetration"] - f["penetration_in_body_overlap"] for f in frames),
                                                     default=0.0),
         "max_speed": max((f["max_speed"] for f in frames), default=0.0),
+        "max_self_intersections": max((f["self_intersections"] for f in frames), default=0),
+        "self_contact": settings.self_contact,
         "max_seam_gap": {s: max(f["seam_gap"][s]["max"] for f in frames) for s in seams},
         "frames": frames,
     }

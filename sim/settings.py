@@ -32,6 +32,7 @@ class SimSettings:
     max_body_speed: float = 5.0  # m/s the search reach allows for between searches
     max_speed: float = 50.0  # m/s; faster means the run has blown up
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep
+    self_contact: bool = True  # the garment collides with itself
     seed: int = 0
 
     def check(self) -> None:

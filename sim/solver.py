@@ -15,6 +15,7 @@ from darts.geometry.warp_runtime import warp
 from sim import kernels
 from sim.coloring import color_order
 from sim.model import ClothModel
+from sim.self_contact import SelfContact
 from sim.settings import SimSettings
 from sim.wind import Wind
 
@@ -59,16 +60,24 @@ class ColoredConstraints:
                       device=self.device)
 
 
+#: Self-contact keeps two layers this many material thicknesses apart (centre to centre).
+SELF_SEPARATION = 1.0
+#: Triangles with a corner closer than this many median rest edge lengths to a particle on the rest
+#: garment are its neighbours, never its contacts.
+SELF_EXCLUSION = 1.5
+
+
 @dataclass
 class FrameMeasure:
     """Fractions of particles inside the body — all, and those where the posed body overlaps
     itself (armpits, a deep squat) so that no place outside it exists — the largest speed (m/s),
-    and whether every value is finite."""
+    whether every value is finite, and how many garment edges pass through a garment triangle."""
 
     penetration: float
     penetration_in_body_overlap: float
     max_speed: float
     finite: bool
+    self_intersections: int
 
 
 def hinge_stiffness(model: ClothModel) -> np.ndarray:
@@ -117,6 +126,9 @@ class ClothSolver:
         self._inside = wp.zeros(2, dtype=wp.int32, device=device)
         self._max_speed = wp.zeros(1, dtype=float, device=device)
         self._finite = wp.zeros(1, dtype=wp.int32, device=device)
+        self.self_contact = SelfContact(
+            self.x, model.rest, model.faces, model.edges, SELF_SEPARATION * self.thickness,
+            SELF_EXCLUSION * float(np.median(model.edge_rest)), device)
         self.time = 0.0
         if settings.solver == "xpbd":
             from sim.xpbd import XpbdIntegrator
@@ -156,15 +168,20 @@ class ClothSolver:
             wp.launch(kernels.find_contacts, dim=self.count,
                       inputs=[self.body.id, self.x, reach, self.contact_face, self.contact_uv, self.contact_local],
                       device=self.device)
+            if self.settings.self_contact:
+                self.self_contact.search(self.x_start, self.self_contact.separation + self.settings.contact_reach)
         wp.launch(kernels.track_contacts, dim=self.count,
                   inputs=[self.body.id, self.contact_face, self.contact_uv, self.contact_local, self.contact_point,
                           self.contact_normal, self.contact_velocity], device=self.device)
 
     def resolve_contacts(self) -> None:
-        """Push particles out of the body and above the ground (one sweep)."""
+        """Push particles out of the body and above the ground, then keep them off the garment's
+        own triangles, layers held by the body staying put (one sweep each)."""
         wp.launch(kernels.resolve_contacts, dim=self.count,
                   inputs=[self.x, self.contact_point, self.contact_normal, self.contact_face, self.thickness,
                           int(self.settings.ground), 0.0, self.body_push, self.ground_push], device=self.device)
+        if self.settings.self_contact:
+            self.self_contact.resolve(self.inverse_mass, self.body_push)
 
     def apply_friction(self, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""
@@ -192,8 +209,38 @@ class ClothSolver:
         wp.launch(kernels.frame_measures, dim=self.count,
                   inputs=[self.body.id, self.x, self.v, self._inside, self._max_speed, self._finite], device=self.device)
         inside = self._inside.numpy()
+        finite = bool(self._finite.numpy()[0])
         return FrameMeasure(float(inside[0]) / self.count, float(inside[1]) / self.count,
-                            float(self._max_speed.numpy()[0]), bool(self._finite.numpy()[0]))
+                            float(self._max_speed.numpy()[0]), finite, int(self.self_contact.crossing_edges().sum()) if finite else 0)
+
+    def diagnose(self) -> str:
+        """Which particle and constraint a blow-up starts from: the first non-finite particle (else the
+        fastest), and the most violated constraint on it (edge strain, seam spring, body or self contact)."""
+        x, v = self.x.numpy().astype(np.float64), self.v.numpy().astype(np.float64)
+        bad = ~np.isfinite(x).all(1) | ~np.isfinite(v).all(1)
+        particle = int(np.argmax(bad)) if bad.any() else int(np.argmax(np.linalg.norm(v, axis=1)))
+        model, found = self.model, []
+        mine = np.any(model.edges == particle, axis=1)
+        if mine.any():
+            e = model.edges[mine]
+            strain = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1) / model.edge_rest[mine] - 1.0
+            worst = int(np.nanargmax(np.abs(np.nan_to_num(strain, nan=np.inf))))
+            found.append((abs(strain[worst]), f"edge {e[worst, 0]}-{e[worst, 1]} strained {100 * strain[worst]:+.0f} %"))
+        for s in np.flatnonzero(np.any(model.springs == particle, axis=1)):
+            a, b = model.springs[s]
+            gap = np.linalg.norm(x[a] - x[b]) - model.spring_rest[s]
+            found.append((gap / max(self.thickness, 1e-6), f"seam '{model.seam_names[model.spring_seam[s]]}' spring "
+                                                           f"{a}-{b} off its rest length by {1e3 * gap:.1f} mm"))
+        if self.contact_face.numpy()[particle] >= 0:
+            point, normal = self.contact_point.numpy()[particle], self.contact_normal.numpy()[particle]
+            depth = self.thickness - float(np.dot(x[particle] - point, normal))
+            found.append((depth / self.thickness, f"body contact {1e3 * depth:.1f} mm deep"))
+        if self.settings.self_contact and self.self_contact.face.numpy()[particle] >= 0:
+            found.append((0.0, f"self contact with garment triangle {self.self_contact.face.numpy()[particle]}"))
+        speed = np.linalg.norm(v[particle])
+        state = "non-finite" if bad[particle] else f"at {speed:.1f} m/s"
+        worst = max(found, key=lambda item: np.nan_to_num(item[0], nan=np.inf))[1] if found else "no constraint"
+        return f"particle {particle} {state}, worst constraint on it: {worst}"
 
     def positions(self) -> np.ndarray:
         """Particle positions [P,3] (float64 copy)."""

@@ -1,6 +1,8 @@
 """The cloth solver: free fall, the dihedral gradient, the five seam regimes, stability, determinism."""
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -159,6 +161,7 @@ def test_a_blow_up_stops_the_run_and_keeps_the_frames_before(body):
     track = build_body_track(body, _walk(20), 30.0, 0.0)
     result = simulate(dart, track, SimSettings(max_speed=1.0), lambda g, b: kept.append(g))
     assert not result.stable and "m/s" in result.message
+    assert re.search(r"particle \d+ at [\d.]+ m/s, worst constraint on it: (edge|seam|body|self)", result.message)
     assert 0 < len(kept) == len(result.frames) < 20
     assert all(frame["max_speed"] <= 1.0 for frame in result.frames) and np.isfinite(kept).all()
 
@@ -171,6 +174,7 @@ def test_non_finite_state_is_reported(body):
     x[7] = np.nan
     solver.x.assign(x)
     assert solver.measure().finite is False
+    assert solver.diagnose().startswith("particle 7 non-finite, worst constraint on it: edge 7-")
 
 
 @pytest.mark.parametrize("motion", shipped_motions())

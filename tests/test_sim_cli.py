@@ -34,7 +34,8 @@ def test_usd_output_is_valid_animated_and_measured(run_sim, tmp_path):
     assert stats["vertices"] == len(points) and stats["substeps"] == 40 and stats["fps"] == 30.0
     assert len(stats["frames"]) == 5 and stats["sim_fps"] > 0 and stats["stable"]
     frame = stats["frames"][-1]
-    assert frame["penetration"] <= 0.01 and frame["max_speed"] < 5.0
+    assert frame["penetration"] <= 0.01 and frame["max_speed"] < 5.0 and frame["self_intersections"] == 0
+    assert stats["self_contact"] is True and stats["max_self_intersections"] == 0
     assert set(frame["seam_gap"]) == {"left_side", "right_side", "waistband"}
     assert all(gap["max"] <= 1e-3 for gap in frame["seam_gap"].values())  # every seam stiff
 
@@ -98,3 +99,35 @@ def test_blow_up_exits_3_and_keeps_the_good_frames(run_sim, tmp_path):
     assert not stats["stable"] and 0 < kept < 60
     stage = Usd.Stage.Open(str(out))
     assert stage.GetEndTimeCode() == kept - 1
+
+
+def test_preview_gif_and_png_show_the_animation(run_sim, run_darts, tmp_path):
+    from PIL import Image
+
+    out, gif = tmp_path / "walk.usdc", tmp_path / "walk.gif"
+    code, _, err = run_sim("short-skirt", "walk", "-o", out, "--preview", gif, "--no-self-contact", *QUICK)
+    assert code == 0, err
+    with Image.open(gif) as image:
+        assert image.n_frames == 5 and min(image.size) >= 300
+        first = np.asarray(image.convert("RGB"), np.float64)
+        image.seek(4)
+        last = np.asarray(image.convert("RGB"), np.float64)
+    # Something is drawn (not a blank canvas), in the garment's panel colours, and it moves.
+    assert (first.sum(axis=2) < 600).mean() > 0.02
+    assert np.abs(first - last).mean() > 0.1
+    png = tmp_path / "sheet.png"
+    code, _, err = run_darts("render", out, "-o", png)
+    assert code == 0, err
+    with Image.open(png) as image:
+        assert image.size[0] > 3 * image.size[1]  # six frames side by side
+
+
+def test_preview_bad_input_is_one_line_and_writes_nothing(run_sim, run_darts, tmp_path):
+    code, _, err = run_sim("short-skirt", "walk", "-o", tmp_path / "a.usdc", "--preview", tmp_path / "a.avi", *QUICK)
+    assert code == 2 and "preview must end in" in err and not list(tmp_path.iterdir())
+    not_usd = tmp_path / "fake.usd"
+    not_usd.write_text("hello")
+    code, _, err = run_darts("render", not_usd, "-o", tmp_path / "b.gif")
+    assert code == 2 and "fake.usd" in err and not (tmp_path / "b.gif").exists()
+    code, _, err = run_darts("render", MOTIONS_DIR / "walk.npz", "-o", tmp_path / "b.gif")
+    assert code == 2 and "walk.npz" in err and not (tmp_path / "b.gif").exists()

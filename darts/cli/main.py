@@ -126,11 +126,20 @@ def motion_info(args) -> int:
     return 0
 
 
+def render(args) -> int:
+    from darts.preview import read_usd_animation, render_preview
+
+    animation = read_usd_animation(args.usd)
+    drawn = render_preview(animation, args.output, max_frames=args.max_frames, progress=True)
+    print(f"wrote {args.output}: {drawn} of {animation.count} frames")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="darts", description="DARTs: bodies, motions and garment templates.",
                                      epilog=f"shipped motions: {', '.join(shipped_motions())}")
     parser.add_argument("--version", action="version", version=f"darts {__version__}")
-    groups = parser.add_subparsers(dest="group", required=True, metavar="{body,motion,template,inspect,export}")
+    groups = parser.add_subparsers(dest="group", required=True, metavar="{body,motion,template,inspect,export,render}")
 
     body = groups.add_parser("body", help="the SMPL-format body model").add_subparsers(dest="command", required=True)
     info = body.add_parser("info", help="vertex/face/joint counts, joint names, height")
@@ -155,6 +164,12 @@ def build_parser() -> argparse.ArgumentParser:
     minfo.add_argument("--json", action="store_true", help="print JSON")
     minfo.set_defaults(run=motion_info)
     add_garment_parsers(groups, _add_body_args)
+    preview = groups.add_parser("render", help="render a darts-sim USD result (body and garment, fixed camera)")
+    preview.add_argument("usd", metavar="OUT.usd", help="a USD file written by darts-sim")
+    preview.add_argument("-o", "--output", required=True, metavar="PREVIEW",
+                         help="preview.gif, preview.mp4 (needs ffmpeg) or preview.png (contact sheet of 6 frames)")
+    preview.add_argument("--max-frames", type=int, default=60, help="frames drawn, evenly spaced (default 60)")
+    preview.set_defaults(run=render)
     return parser
 
 

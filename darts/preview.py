@@ -1,0 +1,152 @@
+"""Preview renders of an animation (body and garment, flat-shaded, fixed camera) with matplotlib.
+
+Points are in the world frame (Z up, metres). ``.gif`` uses Pillow, ``.mp4`` ffmpeg (on PATH),
+``.png`` a contact sheet of evenly spaced frames. ``read_usd_animation`` reads what
+``darts-sim`` writes (``/World/body`` and ``/World/garment``), so a finished result can be rendered.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from darts.errors import DartsInputError
+from darts.fileio import atomic_path
+
+PREVIEW_SUFFIXES = (".gif", ".mp4", ".png")
+LIGHT = np.array([0.4, -0.6, 0.7]) / np.linalg.norm([0.4, -0.6, 0.7])
+
+
+@dataclass
+class Animation:
+    """Meshes [F,3] with per-face RGB colours, and per-frame points [T,V,3] (world, Z up, metres)."""
+
+    faces: dict[str, np.ndarray]
+    colors: dict[str, np.ndarray]
+    frames: dict[str, np.ndarray]
+    fps: float
+    numbers: np.ndarray | None = None  # the animation frame each stored frame is (default 0, 1, ...)
+    total: int | None = None  # frames in the whole animation (default: those stored)
+
+    @property
+    def count(self) -> int:
+        return len(next(iter(self.frames.values())))
+
+    def number(self, index: int) -> int:
+        return int(self.numbers[index]) if self.numbers is not None else index
+
+
+def frames_to_draw(total: int, path: str | os.PathLike, max_frames: int = 60) -> np.ndarray:
+    """Indices of the frames a preview of ``total`` frames draws: at most ``max_frames`` evenly
+    spaced (6 for a .png contact sheet)."""
+    wanted = 6 if Path(path).suffix.lower() == ".png" else max_frames
+    return np.unique(np.linspace(0, total - 1, max(1, min(wanted, total))).round().astype(int))
+
+
+def read_usd_animation(path: str | os.PathLike) -> Animation:
+    """The body and garment meshes of a ``darts-sim`` USD file, every time sample."""
+    from pxr import Usd, UsdGeom
+
+    path = Path(path)
+    if not path.is_file():
+        raise DartsInputError(path, "no such file")
+    try:
+        stage = Usd.Stage.Open(str(path))
+    except Exception:  # pxr raises Tf.ErrorException for anything it cannot read as a layer
+        stage = None
+    if stage is None:
+        raise DartsInputError(path, "not a USD file")
+    faces, colors, frames = {}, {}, {}
+    for name in ("body", "garment"):
+        prim = stage.GetPrimAtPath(f"/World/{name}")
+        if not prim or not prim.IsA(UsdGeom.Mesh):
+            raise DartsInputError(path, f"has no mesh /World/{name} (not written by darts-sim)")
+        mesh = UsdGeom.Mesh(prim)
+        faces[name] = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64).reshape(-1, 3)
+        color = mesh.GetDisplayColorAttr().Get()
+        colors[name] = (np.asarray(color, np.float64) if color is not None and len(color) == len(faces[name])
+                        else np.full((len(faces[name]), 3), 0.7))
+        times = mesh.GetPointsAttr().GetTimeSamples() or [Usd.TimeCode.Default()]
+        frames[name] = np.stack([np.asarray(mesh.GetPointsAttr().Get(t), np.float64) for t in times])
+    return Animation(faces, colors, frames, float(stage.GetTimeCodesPerSecond()))
+
+
+def _shade(points: np.ndarray, faces: np.ndarray, colors: np.ndarray) -> np.ndarray:
+    """Lambert with a fixed light, two-sided: rgb (0.35 + 0.65 |n . l|)."""
+    tri = points[faces]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    return np.clip(colors * (0.35 + 0.65 * np.abs(normals @ LIGHT))[:, None], 0.0, 1.0)
+
+
+class _Painter:
+    """One matplotlib 3D axes with a camera fixed over the whole animation."""
+
+    def __init__(self, axes, animation: Animation):
+        self.axes, self.animation = axes, animation
+        everything = np.concatenate([f.reshape(-1, 3) for f in animation.frames.values()])
+        low, high = everything.min(0), everything.max(0)
+        self.limits = list(zip(low, high))
+        self.names = list(animation.faces)
+        offsets = np.cumsum([0] + [animation.frames[n].shape[1] for n in self.names])
+        self.faces = np.concatenate([animation.faces[n] + o for n, o in zip(self.names, offsets)])
+        self.colors = np.concatenate([animation.colors[n] for n in self.names])
+
+    def draw(self, index: int) -> None:
+        """One frame; both meshes in one collection so that triangles are depth-sorted together."""
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+        ax = self.axes
+        ax.clear()
+        points = np.concatenate([self.animation.frames[n][index] for n in self.names])
+        ax.add_collection3d(Poly3DCollection(points[self.faces], facecolors=_shade(points, self.faces, self.colors),
+                                             linewidths=0.0))
+        for axis, (low, high) in zip("xyz", self.limits):
+            getattr(ax, f"set_{axis}lim")(low, high)
+        ax.set_box_aspect([high - low for low, high in self.limits], zoom=1.3)
+        ax.view_init(elev=10, azim=-60)
+        ax.set_axis_off()
+        number = self.animation.number(index)
+        ax.set_title(f"frame {number}  ({number / self.animation.fps:.2f} s)", fontsize=9)
+
+
+def render_preview(animation: Animation, path: str | os.PathLike, max_frames: int = 60, size: float = 4.0,
+                   progress: bool = False) -> int:
+    """Render ``animation`` to ``path`` (.gif, .mp4 or .png contact sheet); returns the frames drawn:
+    those of ``frames_to_draw`` among the stored ones. The file appears only when complete."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib import animation as mpl_animation
+    from tqdm import tqdm
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in PREVIEW_SUFFIXES:
+        raise DartsInputError(path, f"preview must end in {', '.join(PREVIEW_SUFFIXES)}")
+    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise DartsInputError(path, "an .mp4 preview needs ffmpeg on PATH; use .gif or .png")
+    picks = frames_to_draw(animation.count, path, max_frames)
+    if suffix == ".png":
+        figure = plt.figure(figsize=(size * len(picks) / 1.6, size))
+        for slot, index in enumerate(tqdm(picks, desc="rendering", disable=not progress, leave=False)):
+            _Painter(figure.add_subplot(1, len(picks), slot + 1, projection="3d"), animation).draw(int(index))
+        with atomic_path(path, keep_suffix=True) as tmp:
+            figure.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
+        plt.close(figure)
+        return len(picks)
+    figure = plt.figure(figsize=(size, size))
+    painter = _Painter(figure.add_subplot(projection="3d"), animation)
+    stride_fps = animation.fps * len(picks) / (animation.total or animation.count)
+    writer = mpl_animation.PillowWriter(fps=stride_fps) if suffix == ".gif" else mpl_animation.FFMpegWriter(fps=stride_fps)
+    with atomic_path(path, keep_suffix=True) as tmp:
+        with writer.saving(figure, str(tmp), dpi=100):
+            for index in tqdm(picks, desc="rendering", disable=not progress, leave=False):
+                painter.draw(int(index))
+                writer.grab_frame()
+    plt.close(figure)
+    return len(picks)

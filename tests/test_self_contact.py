@@ -1,0 +1,86 @@
+"""Self-contact: a folded sheet drops onto itself; no vertex may cross a triangle of its own garment."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from darts.dart.model import Dart
+from darts.geometry.warp_runtime import warp
+from sim.model import cloth_model
+from sim.self_contact import SelfContact
+from sim.settings import SimSettings
+from sim.solver import ClothSolver
+
+wp = warp()
+
+SPACING = 0.01  # m between grid vertices
+LAYER = 0.3  # m, length of each layer
+RISE = 0.05  # m, the fold's height: the upper layer starts this far above the lower one
+WIDTH = 0.2  # m
+
+
+def _folded_sheet() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A Z-up sheet folded once: the lower layer lies on the ground, the upper one RISE above it,
+    joined by a vertical strip. Returns vertices [V,3], faces [F,3] and which vertices are upper."""
+    s = np.arange(0.0, 2 * LAYER + RISE + 1e-9, SPACING)
+    y = np.arange(0.0, WIDTH + 1e-9, SPACING)
+    path = np.stack([np.where(s < LAYER, LAYER - s, np.where(s < LAYER + RISE, 0.0, s - LAYER - RISE)),
+                     np.clip(s - LAYER, 0.0, RISE)], axis=1)
+    vertices = np.array([[px, py, pz + 0.003] for px, pz in path for py in y])
+    n = len(y)
+    faces = []
+    for i in range(len(s) - 1):
+        for j in range(n - 1):
+            a, b, c, d = i * n + j, i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1
+            faces += [[a, c, b], [b, c, d]] if (i + j) % 2 else [[a, c, d], [a, d, b]]
+    upper = np.repeat(s > LAYER + RISE + 1e-9, n)
+    return vertices, np.array(faces), upper
+
+
+def _sheet_dart(vertices: np.ndarray, faces: np.ndarray) -> Dart:
+    empty = np.zeros((0, 2), np.int32)
+    return Dart(category="test-sheet", vertices=vertices.astype(np.float32), faces=faces.astype(np.int32),
+                panel=np.zeros(len(faces), np.int32), panel_names=["sheet"], lines={}, seams=[], pairs=empty,
+                pair_seam=np.zeros(0, np.int32), pair_position=np.zeros(0, np.float32))
+
+
+def _drop(self_contact: bool, frames: int = 20):
+    vertices, faces, upper = _folded_sheet()
+    model = cloth_model(_sheet_dart(vertices, faces))
+    # The body is far away: only the ground holds the lower layer.
+    body_vertices = np.array([[0.0, 0.0, 50.0], [1.0, 0.0, 50.0], [0.0, 1.0, 50.0], [0.0, 0.0, 51.0]])
+    body_faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    settings = SimSettings(self_contact=self_contact)
+    solver = ClothSolver(model, model.rest, body_faces, body_vertices, settings)
+    checker = SelfContact(solver.x, model.rest, model.faces, model.edges, 0.0, solver.self_contact.exclusion, "cpu")
+    crossings = []
+    for _ in range(frames):
+        solver.step_frame(body_vertices)
+        crossings.append(int(checker.crossing_edges().sum()))
+    x = solver.positions()
+    particle_upper = np.zeros(len(x), bool)
+    particle_upper[model.particle_of_vertex[upper]] = True
+    return x, particle_upper, crossings, solver.thickness
+
+
+def _overlap(x: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Upper- and lower-layer particles away from the fold and the sheet's sides (5 cm and 3 cm)."""
+    inside = (x[:, 0] > 0.05) & (x[:, 0] < LAYER - 0.05) & (x[:, 1] > 0.03) & (x[:, 1] < WIDTH - 0.03)
+    return upper & inside, ~upper & inside
+
+
+def test_fold_lands_on_itself_without_crossing():
+    x, upper, crossings, thickness = _drop(True)
+    assert max(crossings) == 0
+    # The upper layer has landed (it fell 5 cm) and rests on the lower one, at least half a
+    # material thickness above it everywhere over the lower layer.
+    over, under = _overlap(x, upper)
+    assert x[over, 2].max() < 0.02
+    assert x[over, 2].min() > x[under, 2].max() + 0.5 * thickness
+
+
+def test_without_self_contact_the_fold_passes_through():
+    """The same drop with self-contact off: the upper layer reaches the lower one (the test above can fail)."""
+    x, upper, _, thickness = _drop(False)
+    over, under = _overlap(x, upper)
+    assert x[over, 2].min() <= x[under, 2].max() + 0.5 * thickness
