@@ -16,6 +16,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "data" / "simulation_table.json"
+PARTIAL = RESULTS.with_suffix(".partial.jsonl")  # rows as they finish, so that a stopped run resumes
 REGIME_RUNS = ("welded", "loose", "repulsive", "partial")
 
 
@@ -88,10 +89,20 @@ def main() -> None:
         kept = [r for r in json.loads(RESULTS.read_text()) if r["regime"] != "stiff"]
     else:
         jobs += [(g, "walk", regime) for g in shipped_garments() for regime in REGIME_RUNS]
-    with Pool(args.jobs) as pool:
-        rows = pool.map(run_one, jobs, chunksize=1) + kept
+    done = [json.loads(line) for line in PARTIAL.read_text().splitlines()] if PARTIAL.exists() else []
+    finished = {(r["garment"], r["motion"], r["regime"]) for r in done}
+    rows = list(done)
+    with Pool(args.jobs) as pool, PARTIAL.open("a") as partial:
+        for row in pool.imap_unordered(run_one, [j for j in jobs if j not in finished]):
+            partial.write(json.dumps(row) + "\n")
+            partial.flush()
+            rows.append(row)
+    rows += kept
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    order = {job: index for index, job in enumerate(jobs)}
+    rows.sort(key=lambda r: order.get((r["garment"], r["motion"], r["regime"]), len(order)))
     RESULTS.write_text(json.dumps(rows, indent=1))
+    PARTIAL.unlink()
     print(markdown(rows))
 
 

@@ -75,12 +75,15 @@ def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp
                        x_start: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), reach: float, exclusion: float,
                        contact_face: wp.array(dtype=wp.int32), contact_bary: wp.array(dtype=wp.vec3),
                        contact_side: wp.array(dtype=float)):
-    """Closest garment triangle within ``reach`` of each particle whose corners are all farther than
-    ``exclusion`` from it on the rest garment (-1: none), its barycentrics, and the side of its plane
+    """Closest garment triangle within ``reach`` of each particle, facing it, whose corners are all
+    farther than ``exclusion`` from it on the rest garment (-1: none), its barycentrics, and the side of its plane
     the particle must not leave: kept from the last search for the same triangle, else the side it
     was on at the start of the substep (``x_start``, after the last projection)."""
     i = wp.tid()
     p = x[i]
+    if not wp.isfinite(p):  # a blown-up particle: the run is about to stop; do not walk the BVH
+        contact_face[i] = -1
+        return
     r = wp.vec3(reach)
     query = wp.mesh_query_aabb(mesh, p - r, p + r)
     face = int(0)
@@ -92,8 +95,12 @@ def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp
         if near_on_rest(rest, i, a, b, c, exclusion):
             continue
         bary = closest_on_triangle(p, x[a], x[b], x[c])
-        distance = wp.length(p - (bary[0] * x[a] + bary[1] * x[b] + bary[2] * x[c]))
-        if distance < best_distance:
+        d = p - (bary[0] * x[a] + bary[1] * x[b] + bary[2] * x[c])
+        distance = wp.length(d)
+        # Only a triangle the particle faces (within 60 degrees of its normal): one beside it, in its
+        # own plane, is the particle's own layer a little further on, with no side to keep.
+        facing = wp.abs(wp.dot(d, wp.normalize(wp.cross(x[b] - x[a], x[c] - x[a])))) >= 0.5 * distance
+        if distance < best_distance and facing:
             best = face
             best_distance = distance
             best_bary = bary

@@ -29,7 +29,7 @@ class SimSettings:
     ground: bool = True  # the plane z = 0
     contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
     contact_interval: int = 2  # substeps between closest-point searches
-    max_body_speed: float = 5.0  # m/s the search reach allows for between searches
+    max_body_speed: float = 5.0  # m/s the search reach allows for at least (more when the body is faster)
     max_speed: float = 50.0  # m/s; faster means the run has blown up
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep
     self_contact: bool = True  # the garment collides with itself

@@ -63,7 +63,8 @@ class ColoredConstraints:
 #: Self-contact keeps two layers this many material thicknesses apart (centre to centre).
 SELF_SEPARATION = 1.0
 #: Triangles with a corner closer than this many median rest edge lengths to a particle on the rest
-#: garment are its neighbours, never its contacts.
+#: garment (and at least the self-contact search reach: the rest shape is never in contact with
+#: itself) are its neighbours, never its contacts.
 SELF_EXCLUSION = 1.5
 
 
@@ -128,8 +129,10 @@ class ClothSolver:
         self._finite = wp.zeros(1, dtype=wp.int32, device=device)
         self.self_contact = SelfContact(
             self.x, model.rest, model.faces, model.edges, SELF_SEPARATION * self.thickness,
-            SELF_EXCLUSION * float(np.median(model.edge_rest)), device)
+            max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * self.thickness + settings.contact_reach),
+            device)
         self.time = 0.0
+        self.body_speed = settings.max_body_speed
         if settings.solver == "xpbd":
             from sim.xpbd import XpbdIntegrator
 
@@ -158,13 +161,14 @@ class ClothSolver:
 
     def update_contacts(self, substep: int, dt: float) -> None:
         """Place the body at the end of this substep; every ``contact_interval`` substeps search each
-        particle's closest body point (reaching far enough for the body's motion until the next
-        search); then put every contact plane where its body face is now."""
+        particle's closest body point (reaching as far as the fastest body vertex of this frame,
+        at least ``max_body_speed``, travels until the next search); then put every contact plane
+        where its body face is now."""
         interval = self.settings.contact_interval
         search = substep % interval == 0
         self.place_body((substep + 1) / self.settings.substeps, refit=search)
         if search:
-            reach = self.thickness + self.settings.contact_reach + interval * dt * self.settings.max_body_speed
+            reach = self.thickness + self.settings.contact_reach + interval * dt * self.body_speed
             wp.launch(kernels.find_contacts, dim=self.count,
                       inputs=[self.body.id, self.x, reach, self.contact_face, self.contact_uv, self.contact_local],
                       device=self.device)
@@ -194,6 +198,9 @@ class ClothSolver:
         """Advance one frame (1 / fps seconds) while the body moves to ``body_next`` [V,3]."""
         self.body_start, self.body_end = self.body_end, self.body_start
         self.body_end.assign(np.ascontiguousarray(body_next, np.float32))
+        # The search reach covers what the fastest body vertex travels between searches this frame.
+        moved = np.linalg.norm(np.asarray(body_next, np.float32) - self.body_start.numpy(), axis=1).max()
+        self.body_speed = max(float(moved) * self.settings.fps, self.settings.max_body_speed)
         substeps = self.settings.substeps
         dt = 1.0 / (self.settings.fps * substeps)
         for s in range(substeps):
