@@ -25,17 +25,19 @@ def main() -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
     import numpy as np
 
     newton = json.loads((DATA / "benchmark_newton.json").read_text())
     scaling = json.loads((DATA / "benchmark_scaling.json").read_text())["sizes"]
-    figure, (bars, curve, shares) = plt.subplots(1, 3, figsize=(15, 4.2))
+    figure, (bars, curve, shares) = plt.subplots(1, 3, figsize=(16, 4.6))
 
     names = list(newton["results"])
     fps = [newton["results"][n]["sim_fps"] for n in names]
     colors = ["tab:blue" if n == "ours" else ("tab:gray" if newton["results"][n]["stable"] else "tab:red") for n in names]
     bars.bar(names, [max(f, 1e-4) for f in fps], color=colors)
     bars.set_yscale("log")
+    bars.tick_params(axis="x", labelrotation=30, labelsize=8)
     bars.set_ylabel("simulated frames / s (log)")
     scene = newton["scene"]
     bars.set_title(f"{scene['garment']} on {scene['motion']}, {scene['particles']} particles, {scene['substeps']} substeps",
@@ -48,6 +50,8 @@ def main() -> None:
     particles = np.array([scaling[s]["particles"] for s in sizes])
     curve.plot(particles, [scaling[s]["us_per_particle_substep"] for s in sizes], "o-", color="tab:blue")
     curve.set_xscale("log")
+    curve.set_xticks(particles, [f"{p / 1000:.1f}k" for p in particles], minor=False)
+    curve.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     curve.set_xlabel("particles")
     curve.set_ylabel("µs per particle per substep", color="tab:blue")
     twin = curve.twinx()
@@ -64,7 +68,7 @@ def main() -> None:
     shares.bar(sizes, 1.0 - bottom, bottom=bottom, label="other kernels and Python", color="lightgray")
     shares.set_ylabel("share of the frame time")
     shares.set_title("where the time goes", fontsize=9)
-    shares.legend(fontsize=7, loc="lower right")
+    shares.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     figure.tight_layout()
     out = ROOT / "docs" / "images" / "benchmarks.png"
     figure.savefig(out, dpi=110)
