@@ -179,13 +179,14 @@ class ClothSolver:
                           self.contact_normal, self.contact_velocity], device=self.device)
 
     def resolve_contacts(self) -> None:
-        """Push particles out of the body and above the ground, then keep them off the garment's
-        own triangles, layers held by the body staying put (one sweep each)."""
+        """Keep particles off the garment's own triangles (layers the body has pushed this substep
+        staying put), then push them out of the body and above the ground, which has the last word
+        (one sweep each)."""
+        if self.settings.self_contact:
+            self.self_contact.resolve(self.inverse_mass, self.body_push)
         wp.launch(kernels.resolve_contacts, dim=self.count,
                   inputs=[self.x, self.contact_point, self.contact_normal, self.contact_face, self.thickness,
                           int(self.settings.ground), 0.0, self.body_push, self.ground_push], device=self.device)
-        if self.settings.self_contact:
-            self.self_contact.resolve(self.inverse_mass, self.body_push)
 
     def apply_friction(self, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""
