@@ -1,4 +1,5 @@
-"""Preview renders of an animation (body and garment, flat-shaded, fixed camera) with matplotlib.
+"""Preview renders of an animation (body and garment, flat-shaded, fixed front-left camera) with
+matplotlib, through ``darts.render.draw_mesh``.
 
 Points are in the world frame (Z up, metres). ``.gif`` uses Pillow, ``.mp4`` ffmpeg (on PATH),
 ``.png`` a contact sheet of evenly spaced frames. ``read_usd_animation`` reads what
@@ -15,9 +16,9 @@ import numpy as np
 
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path
+from darts.render import WORLD_FRONT_LEFT, draw_mesh
 
 PREVIEW_SUFFIXES = (".gif", ".mp4", ".png")
-LIGHT = np.array([0.4, -0.6, 0.7]) / np.linalg.norm([0.4, -0.6, 0.7])
 
 
 @dataclass
@@ -74,41 +75,28 @@ def read_usd_animation(path: str | os.PathLike) -> Animation:
     return Animation(faces, colors, frames, float(stage.GetTimeCodesPerSecond()))
 
 
-def _shade(points: np.ndarray, faces: np.ndarray, colors: np.ndarray) -> np.ndarray:
-    """Lambert with a fixed light, two-sided: rgb (0.35 + 0.65 |n . l|)."""
-    tri = points[faces]
-    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
-    return np.clip(colors * (0.35 + 0.65 * np.abs(normals @ LIGHT))[:, None], 0.0, 1.0)
-
-
 class _Painter:
-    """One matplotlib 3D axes with a camera fixed over the whole animation."""
+    """One axes with a camera fixed over the whole animation (front-left view, orthographic)."""
 
     def __init__(self, axes, animation: Animation):
         self.axes, self.animation = axes, animation
+        right, up = WORLD_FRONT_LEFT
         everything = np.concatenate([f.reshape(-1, 3) for f in animation.frames.values()])
-        low, high = everything.min(0), everything.max(0)
-        self.limits = list(zip(low, high))
+        flat = np.stack([everything @ right, everything @ up], axis=1)
+        self.limits = flat.min(0) - 0.05, flat.max(0) + 0.05
         self.names = list(animation.faces)
         offsets = np.cumsum([0] + [animation.frames[n].shape[1] for n in self.names])
         self.faces = np.concatenate([animation.faces[n] + o for n, o in zip(self.names, offsets)])
         self.colors = np.concatenate([animation.colors[n] for n in self.names])
 
     def draw(self, index: int) -> None:
-        """One frame; both meshes in one collection so that triangles are depth-sorted together."""
-        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
+        """One frame; both meshes drawn together so that triangles are depth-sorted together."""
         ax = self.axes
         ax.clear()
         points = np.concatenate([self.animation.frames[n][index] for n in self.names])
-        ax.add_collection3d(Poly3DCollection(points[self.faces], facecolors=_shade(points, self.faces, self.colors),
-                                             linewidths=0.0))
-        for axis, (low, high) in zip("xyz", self.limits):
-            getattr(ax, f"set_{axis}lim")(low, high)
-        ax.set_box_aspect([high - low for low, high in self.limits], zoom=1.3)
-        ax.view_init(elev=10, azim=-60)
-        ax.set_axis_off()
+        draw_mesh(ax, points, self.faces, self.colors, *WORLD_FRONT_LEFT, two_sided=True)
+        ax.set_xlim(self.limits[0][0], self.limits[1][0])
+        ax.set_ylim(self.limits[0][1], self.limits[1][1])
         number = self.animation.number(index)
         ax.set_title(f"frame {number}  ({number / self.animation.fps:.2f} s)", fontsize=9)
 
@@ -117,11 +105,8 @@ def render_preview(animation: Animation, path: str | os.PathLike, max_frames: in
                    progress: bool = False) -> int:
     """Render ``animation`` to ``path`` (.gif, .mp4 or .png contact sheet); returns the frames drawn:
     those of ``frames_to_draw`` among the stored ones. The file appears only when complete."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib import animation as mpl_animation
+    from matplotlib.figure import Figure
     from tqdm import tqdm
 
     path = Path(path)
@@ -132,15 +117,14 @@ def render_preview(animation: Animation, path: str | os.PathLike, max_frames: in
         raise DartsInputError(path, "an .mp4 preview needs ffmpeg on PATH; use .gif or .png")
     picks = frames_to_draw(animation.count, path, max_frames)
     if suffix == ".png":
-        figure = plt.figure(figsize=(size * len(picks) / 1.6, size))
+        figure = Figure(figsize=(size * len(picks) / 1.6, size))
         for slot, index in enumerate(tqdm(picks, desc="rendering", disable=not progress, leave=False)):
-            _Painter(figure.add_subplot(1, len(picks), slot + 1, projection="3d"), animation).draw(int(index))
+            _Painter(figure.add_subplot(1, len(picks), slot + 1), animation).draw(int(index))
         with atomic_path(path, keep_suffix=True) as tmp:
             figure.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
-        plt.close(figure)
         return len(picks)
-    figure = plt.figure(figsize=(size, size))
-    painter = _Painter(figure.add_subplot(projection="3d"), animation)
+    figure = Figure(figsize=(size, size))
+    painter = _Painter(figure.add_subplot(), animation)
     stride_fps = animation.fps * len(picks) / (animation.total or animation.count)
     writer = mpl_animation.PillowWriter(fps=stride_fps) if suffix == ".gif" else mpl_animation.FFMpegWriter(fps=stride_fps)
     with atomic_path(path, keep_suffix=True) as tmp:
@@ -148,5 +132,4 @@ def render_preview(animation: Animation, path: str | os.PathLike, max_frames: in
             for index in tqdm(picks, desc="rendering", disable=not progress, leave=False):
                 painter.draw(int(index))
                 writer.grab_frame()
-    plt.close(figure)
     return len(picks)

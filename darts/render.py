@@ -11,6 +11,8 @@ from matplotlib.collections import PolyCollection
 FRONT = (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))  # canonical frame: look along -Z
 SIDE = (np.array([0, 0, 1.0]), np.array([0, 1.0, 0]))  # look along -X, front +Z to the right
 BACK = (np.array([-1.0, 0, 0]), np.array([0, 1.0, 0]))
+#: A posed scene (AMASS world, Z up, the body facing -Y) seen from the front-left.
+WORLD_FRONT_LEFT = (np.array([np.cos(0.6), np.sin(0.6), 0.0]), np.array([0, 0, 1.0]))
 
 
 def draw_mesh(ax, vertices, faces, colors, right, up, two_sided: bool = False):

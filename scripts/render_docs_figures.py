@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from darts.body.io import load_body  # noqa: E402
-from darts.render import draw_mesh  # noqa: E402
+from darts.render import WORLD_FRONT_LEFT, draw_mesh  # noqa: E402
 from darts.body.segmentation import PART_NAMES, body_segmentation  # noqa: E402
 from darts.motion.amass import load_motion  # noqa: E402
 from darts.motion.posing import pose_sequence  # noqa: E402
@@ -40,8 +40,7 @@ def body_figure(out: Path) -> None:
 
 def draw_world_front_left(ax, points, faces, colors, half_width: float, top: float, title: str, fontsize: int) -> None:
     """A posed scene (AMASS world, Z up, the body facing -Y) seen from the front-left."""
-    right = np.array([np.cos(0.6), np.sin(0.6), 0.0])
-    draw_mesh(ax, points, faces, colors, right, np.array([0, 0, 1.0]))
+    draw_mesh(ax, points, faces, colors, *WORLD_FRONT_LEFT)
     ax.set_xlim(-half_width, half_width)
     ax.set_ylim(-0.05, top)
     ax.set_title(title, fontsize=fontsize)
