@@ -119,44 +119,16 @@ def pinned_weight(inverse_mass: wp.array(dtype=float), body_push: wp.array(dtype
     return inverse_mass[i]
 
 
-@wp.func
-def _keep_off(faces: wp.array2d(dtype=wp.int32), face: int, bary: wp.vec3, side: float,
-              inverse_mass: wp.array(dtype=float), body_push: wp.array(dtype=float), separation: float, i: int,
-              x: wp.array(dtype=wp.vec3)):
-    a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
-    xa, xb, xc = x[a], x[b], x[c]
-    scaled = wp.cross(xb - xa, xc - xa)
-    area2 = wp.length(scaled)
-    if area2 < 1.0e-12:
-        return
-    n = side * scaled / area2
-    q = bary[0] * xa + bary[1] * xb + bary[2] * xc
-    d = x[i] - q
-    height = wp.dot(d, n)
-    distance = wp.length(d)
-    if height > 0.0 and distance > 1.0e-9:
-        n = d / distance  # still on its side: keep the distance, also off the triangle's edges
-        height = distance
-    constraint = height - separation
-    if constraint >= 0.0:
-        return
-    wi, wa, wb, wc = (pinned_weight(inverse_mass, body_push, i), pinned_weight(inverse_mass, body_push, a),
-                      pinned_weight(inverse_mass, body_push, b), pinned_weight(inverse_mass, body_push, c))
-    weight = wi + bary[0] * bary[0] * wa + bary[1] * bary[1] * wb + bary[2] * bary[2] * wc
-    step = -constraint / weight
-    wp.atomic_add(x, i, (wi * step) * n)
-    wp.atomic_sub(x, a, (wa * bary[0] * step) * n)
-    wp.atomic_sub(x, b, (wb * bary[1] * step) * n)
-    wp.atomic_sub(x, c, (wc * bary[2] * step) * n)
-
-
 @wp.kernel
 def resolve_self_contacts(faces: wp.array2d(dtype=wp.int32), contact_face: wp.array(dtype=wp.int32),
                           contact_bary: wp.array(dtype=wp.vec3), contact_side: wp.array(dtype=float),
                           inverse_mass: wp.array(dtype=float), body_push: wp.array(dtype=float), separation: float,
-                          x: wp.array(dtype=wp.vec3)):
+                          reach: float, x: wp.array(dtype=wp.vec3), delta: wp.array(dtype=wp.vec3),
+                          hits: wp.array(dtype=float)):
     """C = |x_i - q| - separation >= 0 with q = sum_k b_k x_k while x_i is on its side of the plane,
-    else C = side (x_i - q) . n - separation, projected with weights w_i and b_k^2 w_k."""
+    else C = side (x_i - q) . n - separation, projected with weights w_i and b_k^2 w_k into ``delta``
+    (``hits`` counts the corrections each particle gets); a particle more than ``reach`` behind the
+    plane is left alone (a stale contact, not a crossing to undo)."""
     i = wp.tid()
     face = contact_face[i]
     if face < 0 or contact_side[i] == 0.0:
@@ -177,16 +149,30 @@ def resolve_self_contacts(faces: wp.array2d(dtype=wp.int32), contact_face: wp.ar
         n = d / distance  # still on its side: keep the distance, also off the triangle's edges
         height = distance
     constraint = height - separation
-    if constraint >= 0.0:
-        return
+    if constraint >= 0.0 or height < -reach:
+        return  # apart, or so far behind that the contact is stale (its triangle has moved on)
     wi, wa, wb, wc = (pinned_weight(inverse_mass, body_push, i), pinned_weight(inverse_mass, body_push, a),
                       pinned_weight(inverse_mass, body_push, b), pinned_weight(inverse_mass, body_push, c))
     weight = wi + bary[0] * bary[0] * wa + bary[1] * bary[1] * wb + bary[2] * bary[2] * wc
     step = -constraint / weight
-    wp.atomic_add(x, i, (wi * step) * n)
-    wp.atomic_sub(x, a, (wa * bary[0] * step) * n)
-    wp.atomic_sub(x, b, (wb * bary[1] * step) * n)
-    wp.atomic_sub(x, c, (wc * bary[2] * step) * n)
+    depth = -constraint  # no particle moves further than the violation (a light corner under a heavy particle would)
+    wp.atomic_add(delta, i, wp.min(wi * step, depth) * n)
+    wp.atomic_sub(delta, a, wp.min(wa * bary[0] * step, depth) * n)
+    wp.atomic_sub(delta, b, wp.min(wb * bary[1] * step, depth) * n)
+    wp.atomic_sub(delta, c, wp.min(wc * bary[2] * step, depth) * n)
+    wp.atomic_add(hits, i, 1.0)
+    wp.atomic_add(hits, a, 1.0)
+    wp.atomic_add(hits, b, 1.0)
+    wp.atomic_add(hits, c, 1.0)
+
+
+@wp.kernel
+def apply_averaged(delta: wp.array(dtype=wp.vec3), hits: wp.array(dtype=float), x: wp.array(dtype=wp.vec3)):
+    """x_i += delta_i / hits_i: each particle moves by the mean of its contact corrections (Jacobi
+    with averaging, so that a triangle many particles lean on is not pushed once per particle)."""
+    i = wp.tid()
+    if hits[i] > 0.0:
+        x[i] = x[i] + delta[i] / hits[i]
 
 
 @wp.func
@@ -244,6 +230,7 @@ class SelfContact:
                  exclusion: float, device: str):
         self.x, self.device, self.count = x, device, x.shape[0]
         self.separation, self.exclusion = float(separation), float(exclusion)
+        self.reach = float(exclusion)
         self.faces = wp.array(np.ascontiguousarray(faces, np.int32), dtype=wp.int32, device=device)
         self.edges = wp.array(np.ascontiguousarray(edges, np.int32), dtype=wp.int32, device=device)
         self.rest = wp.array(np.ascontiguousarray(rest, np.float32), dtype=wp.vec3, device=device)
@@ -252,11 +239,14 @@ class SelfContact:
         self.face = wp.full(self.count, -1, dtype=wp.int32, device=device)
         self.bary = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self.side = wp.zeros(self.count, dtype=float, device=device)
+        self._delta = wp.zeros(self.count, dtype=wp.vec3, device=device)
+        self._hits = wp.zeros(self.count, dtype=float, device=device)
         self._crossing = wp.zeros(self.edges.shape[0], dtype=wp.int32, device=device)
 
     def search(self, x_start, reach: float) -> None:
         """Refit the garment's BVH to the particles and find each one's closest non-neighbour triangle
         (``x_start``: the positions the sides are taken from)."""
+        self.reach = float(reach)
         self.mesh.refit()
         wp.launch(find_self_contacts, dim=self.count,
                   inputs=[self.mesh.id, self.faces, self.x, x_start, self.rest, reach, self.exclusion, self.face, self.bary,
@@ -264,10 +254,15 @@ class SelfContact:
 
     def resolve(self, inverse_mass, body_push) -> None:
         """One sweep keeping every particle ``separation`` off its triangle, on its side (particles
-        the body pushed this substep, ``body_push`` > 0, count ten times heavier)."""
+        the body pushed this substep, ``body_push`` > 0, count ten times heavier), each particle
+        moved by the mean of its corrections."""
+        self._delta.zero_()
+        self._hits.zero_()
         wp.launch(resolve_self_contacts, dim=self.count,
-                  inputs=[self.faces, self.face, self.bary, self.side, inverse_mass, body_push, self.separation, self.x],
+                  inputs=[self.faces, self.face, self.bary, self.side, inverse_mass, body_push, self.separation,
+                          self.reach, self.x, self._delta, self._hits],
                   device=self.device)
+        wp.launch(apply_averaged, dim=self.count, inputs=[self._delta, self._hits, self.x], device=self.device)
 
     def crossing_edges(self) -> np.ndarray:
         """Mask [E] of the garment edges that pass through a garment triangle right now."""
