@@ -12,12 +12,15 @@ wp = warp()
 
 
 @wp.kernel
-def _closest_points(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float,
+def _closest_points(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float, winding: int,
                     distance: wp.array(dtype=float), closest: wp.array(dtype=wp.vec3),
                     normal: wp.array(dtype=wp.vec3)):
     i = wp.tid()
     p = points[i]
-    query = wp.mesh_query_point_sign_winding_number(mesh, p, max_dist)
+    if winding != 0:
+        query = wp.mesh_query_point_sign_winding_number(mesh, p, max_dist)
+    else:
+        query = wp.mesh_query_point_sign_normal(mesh, p, max_dist)
     if query.result:
         c = wp.mesh_eval_position(mesh, query.face, query.u, query.v)
         closest[i] = c
@@ -37,12 +40,14 @@ class SurfaceDistance:
         self._faces = wp.array(np.ascontiguousarray(faces, np.int32).reshape(-1), dtype=wp.int32, device=device)
         self.mesh = wp.Mesh(points=self._points, indices=self._faces, support_winding_number=True)
 
-    def query(self, points: np.ndarray, max_dist: float = 10.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(signed distance [N], closest surface point [N,3], outward face normal there [N,3])."""
+    def query(self, points: np.ndarray, max_dist: float = 10.0, winding: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(signed distance [N], closest surface point [N,3], outward face normal there [N,3]). The
+        sign is by the winding number, or (``winding`` False, ten times faster) by the angle-weighted
+        pseudo-normal at the closest point, exact for a closed mesh that does not intersect itself."""
         pts = wp.array(np.ascontiguousarray(points, np.float32), dtype=wp.vec3, device=self.device)
         dist = wp.zeros(len(points), dtype=float, device=self.device)
         closest = wp.zeros(len(points), dtype=wp.vec3, device=self.device)
         normal = wp.zeros(len(points), dtype=wp.vec3, device=self.device)
-        wp.launch(_closest_points, dim=len(points), inputs=[self.mesh.id, pts, max_dist, dist, closest, normal],
+        wp.launch(_closest_points, dim=len(points), inputs=[self.mesh.id, pts, max_dist, int(winding), dist, closest, normal],
                   device=self.device)
         return dist.numpy().astype(np.float64), closest.numpy().astype(np.float64), normal.numpy().astype(np.float64)

@@ -1,0 +1,73 @@
+"""``darts deform``: fit a DART's feature lines to target lines with the CRDL."""
+from __future__ import annotations
+
+import json
+
+from darts.body.io import load_body
+from darts.crdl.deform import SOLVERS, deform_dart, weld_garment
+from darts.crdl.layer import CrdlWeights
+from darts.crdl.targets import EDITS, edit_targets, parse_edit, read_target_lines
+from darts.dart.io import load_dart, save_dart
+from darts.errors import DartsInputError
+from darts.fileio import atomic_path
+from darts.templates.build import DEFAULT_EASE
+
+
+def deform(args) -> int:
+    if (args.lines is None) == (not args.edit):
+        raise DartsInputError(None, "darts deform needs either --lines LINES.npz or one or more --edit NAME=METRES")
+    if (args.mask is None) != (args.camera is None):
+        raise DartsInputError(None, "--mask and --camera go together")
+    dart = load_dart(args.garment)
+    body = load_body(args.body)
+    if body.name != dart.body_model:
+        raise DartsInputError(args.garment, f"was made for the body '{dart.body_model}', not '{body.name}' (pass it with --body)")
+    silhouette = None
+    if args.mask is not None:
+        from darts.crdl.silhouette import Silhouette
+
+        silhouette = Silhouette.from_files(args.mask, args.camera)
+    if args.lines is not None:
+        targets, clearance = read_target_lines(args.lines, dart.category, list(dart.lines)), None
+    else:
+        garment = weld_garment(dart)
+        edits = [parse_edit(text) for text in args.edit]
+        targets, clearance = edit_targets(dart.category, garment.vertices, garment.lines, edits), DEFAULT_EASE
+    weights = CrdlWeights(silhouette=args.silhouette_weight if silhouette is not None else 0.0)
+    options = {"progress": True} if args.solver == "adam" else {}
+    deformed, report = deform_dart(dart, body, targets, args.solver, weights, silhouette, clearance=clearance, **options)
+    save_dart(deformed, args.output)
+    if args.report:
+        with atomic_path(args.report) as tmp:
+            tmp.write_text(json.dumps(report, indent=1))
+    print(f"wrote {args.output}: {args.solver}, {report['iterations']} iterations in {report['wall_seconds']:.2f} s, "
+          f"ARAP energy {report['arap_energy']:.4g}, handle RMSE {1e3 * report['handle_rmse']:.2f} mm, "
+          f"{100 * report['penetration']:.2f} % of vertices inside the body")
+    return 0
+
+
+def add_parser(groups) -> None:
+    """Register ``darts deform``."""
+    parser = groups.add_parser(
+        "deform", help="deform a DART so that its feature lines reach target lines (the CRDL)",
+        description="Deform a DART with the Constrained Rigid Deformation Layer: as rigid as possible (ARAP), "
+                    "feature lines on their targets, outside the body. Targets come from --lines or from --edit.")
+    parser.add_argument("garment", metavar="GARMENT.npz")
+    parser.add_argument("-o", "--output", required=True, metavar="OUT.npz", help="the deformed DART")
+    parser.add_argument("--lines", metavar="LINES.npz",
+                        help="target loops: one [K,3] array per line name (canonical frame, Y up, metres)")
+    parser.add_argument("--edit", action="append", default=[], metavar="NAME=METRES",
+                        help=f"procedural target, repeatable; NAME one of {', '.join(EDITS)} "
+                             "(hem/sleeve: lengthen > 0, shorten < 0; the others: widen > 0)")
+    parser.add_argument("--mask", metavar="MASK.png", help="garment silhouette seen by --camera (white = garment)")
+    parser.add_argument("--camera", metavar="CAMERA.json", help="pinhole camera of the mask (see docs/crdl.md)")
+    parser.add_argument("--silhouette-weight", type=float, default=1.0, metavar="W",
+                        help="weight of the silhouette term (default 1)")
+    parser.add_argument("--solver", choices=SOLVERS, default="local-global",
+                        help="local-global (fast, default) or adam (the paper's optimiser)")
+    parser.add_argument("--report", metavar="REPORT.json",
+                        help="write arap_energy, handle_rmse (m), penetration, iterations, wall_seconds")
+    parser.add_argument("--body", metavar="PATH",
+                        help="the SMPL-format body the DART was made for (default: the bundled body; the shape "
+                             "comes from the DART)")
+    parser.set_defaults(run=deform)

@@ -1,0 +1,128 @@
+"""The ARAP energy (paper, Eq. 2; Sorkine & Alexa 2007) of a deformed mesh against its rest shape.
+
+E(p) = sum_i sum_{j in N(i)} w_ij |(p_i - p_j) - R_i (r_i - r_j)|^2 over the spokes (directed edges)
+of every vertex, w_ij = (cot a_ij + cot b_ij) / 2 (clamped to stay positive), R_i the rotation that
+best maps vertex i's rest spokes onto its deformed ones. Arrays are [V,3] in the frame of the
+template (the body's canonical frame, Y up), metres.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import torch
+
+from darts.geometry.warp_runtime import warp
+
+wp = warp()
+
+#: Smallest cotangent weight kept: obtuse triangles give negative weights, which make the energy
+#: indefinite; clamping them is the usual remedy.
+MIN_WEIGHT = 1.0e-3
+
+
+@dataclass
+class ArapSystem:
+    """Spokes of a rest mesh: directed edges ``heads`` -> ``tails`` [E] with weights [E] and rest
+    vectors r_head - r_tail [E,3] (float64 tensors)."""
+
+    rest: torch.Tensor
+    heads: torch.Tensor
+    tails: torch.Tensor
+    weights: torch.Tensor
+    rest_spokes: torch.Tensor
+
+    @property
+    def vertex_count(self) -> int:
+        return self.rest.shape[0]
+
+    def incidence(self) -> sp.csr_matrix:
+        """K [E,V]: (K p)_e = p_head - p_tail, so that E = |sqrt(W) (K p - R r)|^2."""
+        count = len(self.heads)
+        rows = np.concatenate([np.arange(count), np.arange(count)])
+        cols = np.concatenate([self.heads.numpy(), self.tails.numpy()])
+        values = np.concatenate([np.ones(count), -np.ones(count)])
+        return sp.csr_matrix((values, (rows, cols)), shape=(count, self.vertex_count))
+
+    def laplacian(self) -> sp.csc_matrix:
+        """K^T W K [V,V]: the matrix of the global step (twice the cotangent Laplacian)."""
+        k = self.incidence()
+        return (k.T @ sp.diags(self.weights.numpy()) @ k).tocsc()
+
+
+def arap_system(vertices: np.ndarray, faces: np.ndarray) -> ArapSystem:
+    """Spokes and cotangent weights of the rest mesh (vertices [V,3], faces [F,3])."""
+    import gpytoolbox
+
+    vertices = np.asarray(vertices, np.float64)
+    faces = np.asarray(faces, np.int64)
+    half = gpytoolbox.cotangent_weights(vertices, faces)  # [F,3]: cot/2 of the corner opposite each half-edge
+    starts = np.concatenate([faces[:, 1], faces[:, 2], faces[:, 0]])
+    ends = np.concatenate([faces[:, 2], faces[:, 0], faces[:, 1]])
+    lo, hi = np.minimum(starts, ends), np.maximum(starts, ends)
+    edges, inverse = np.unique(np.stack([lo, hi], 1), axis=0, return_inverse=True)
+    weight = np.maximum(np.bincount(inverse.reshape(-1), weights=half.T.reshape(-1), minlength=len(edges)), MIN_WEIGHT)
+    heads = np.concatenate([edges[:, 0], edges[:, 1]])
+    tails = np.concatenate([edges[:, 1], edges[:, 0]])
+    rest = torch.as_tensor(vertices)
+    heads_t, tails_t = torch.as_tensor(heads), torch.as_tensor(tails)
+    return ArapSystem(rest, heads_t, tails_t, torch.as_tensor(np.concatenate([weight, weight])),
+                      rest[heads_t] - rest[tails_t])
+
+
+@wp.kernel
+def _rotations_from_covariances(covariance: wp.array(dtype=wp.mat33d), rotation: wp.array(dtype=wp.mat33d)):
+    """R = V U^T from S = U diag(s) V^T, U's column of the smallest s negated if det(R) < 0."""
+    i = wp.tid()
+    u = wp.mat33d()
+    s = wp.vec3d()
+    v = wp.mat33d()
+    wp.svd3(covariance[i], u, s, v)
+    r = v * wp.transpose(u)
+    if wp.determinant(r) < wp.float64(0.0):
+        k = int(0)
+        if s[1] < s[k]:
+            k = 1
+        if s[2] < s[k]:
+            k = 2
+        flip = wp.identity(n=3, dtype=wp.float64)
+        flip[k, k] = wp.float64(-1.0)
+        r = v * flip * wp.transpose(u)
+    rotation[i] = r
+
+
+def best_rotations(system: ArapSystem, vertices: torch.Tensor) -> torch.Tensor:
+    """R_i [V,3,3] = V_i U_i^T from the SVD of S_i = sum_j w_ij (r_i - r_j)(p_i - p_j)^T, with the
+    sign of U's column of the smallest singular value flipped where det(V U^T) < 0 (so that R_i is
+    a rotation, not a reflection). Differentiable (torch's SVD) when ``vertices`` needs a gradient,
+    else Warp's 3x3 SVD (several times faster)."""
+    spokes = vertices[system.heads] - vertices[system.tails]
+    outer = system.weights[:, None, None] * system.rest_spokes[:, :, None] * spokes[:, None, :]
+    covariance = torch.zeros(system.vertex_count, 3, 3, dtype=vertices.dtype).index_add(0, system.heads, outer)
+    if not (torch.is_grad_enabled() and covariance.requires_grad):
+        result = wp.zeros(system.vertex_count, dtype=wp.mat33d, device="cpu")
+        wp.launch(_rotations_from_covariances, dim=system.vertex_count,
+                  inputs=[wp.array(covariance.double().contiguous().numpy(), dtype=wp.mat33d, device="cpu"), result],
+                  device="cpu")
+        return torch.from_numpy(result.numpy()).to(vertices.dtype)
+    u, _, vh = torch.linalg.svd(covariance)
+    flip = torch.ones(system.vertex_count, 3, dtype=vertices.dtype)
+    flip[:, 2] = torch.sign(torch.linalg.det(vh.transpose(1, 2) @ u.transpose(1, 2))).detach()
+    flip[:, 2][flip[:, 2] == 0] = 1.0
+    return vh.transpose(1, 2) @ (u * flip[:, None, :]).transpose(1, 2)
+
+
+def rotated_rest_spokes(system: ArapSystem, rotations: torch.Tensor) -> torch.Tensor:
+    """R_head (r_head - r_tail) [E,3]: where each spoke should point."""
+    return torch.einsum("eab,eb->ea", rotations[system.heads], system.rest_spokes)
+
+
+def arap_energy(system: ArapSystem, vertices: torch.Tensor, rotations: torch.Tensor | None = None) -> torch.Tensor:
+    """E of Eq. 2. Without ``rotations`` the best ones are used, detached: the energy is minimal in
+    them, so dE/dp at fixed R is the exact gradient."""
+    if rotations is None:
+        rotations = best_rotations(system, vertices.detach())
+    spokes = vertices[system.heads] - vertices[system.tails]
+    residual = spokes - rotated_rest_spokes(system, rotations)
+    return (system.weights * (residual * residual).sum(1)).sum()

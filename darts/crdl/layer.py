@@ -1,0 +1,289 @@
+"""The Constrained Rigid Deformation Layer (paper, Sec. 3): deform a template so that its feature
+lines reach target lines while it stays as rigid as possible and outside the body.
+
+Objective over the vertices p [V,3] (canonical frame, metres), the same for both solvers:
+
+    E(p) = E_arap(p) + w_h sum_k |p_{h_k} - t_k|^2 + w_f sum_i max(0, m - s_i(p))^2 [+ w_s L_sil(p)]
+
+with E_arap of Eq. 2, t_k the target matched to handle vertex h_k (arc length), s_i the signed
+distance to the fit surface (Eq. 3, body or lower-body hull) and m a margin.
+
+- ``solve_adam``: the paper's way, p a learnable parameter, Adam on E.
+- ``solve_local_global``: block descent on E(p, R, z) = E_arap(p, R) + handles + w_f |p - z|^2 with
+  z_i the point of the feasible half-space nearest p_i: local steps set R (SVD) and z (projection),
+  the global step solves (K^T W K + w_h S^T S + w_f I) p = b, one matrix factored once. Every step
+  lowers E, so it converges monotonically. It is differentiable: gradients reach the targets.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import torch
+from scipy.sparse.linalg import splu
+
+from darts.crdl.arap import arap_energy, arap_system, best_rotations, rotated_rest_spokes
+from darts.crdl.fit import FitSurface, fit_deficit
+
+
+#: Relative tolerance of the contact rounds before the contact set is complete.
+ROUND_TOLERANCE = 1e-3
+#: 1/tau of the silhouette's proximal-gradient step (per vertex, in the units of the ARAP weights).
+SILHOUETTE_PROXIMAL = 10.0
+
+
+@dataclass
+class CrdlWeights:
+    """Weights of the objective's terms (the ARAP term has weight 1)."""
+
+    handle: float = 1000.0
+    fit: float = 10.0
+    silhouette: float = 0.0
+    margin: float = 0.003  # metres outside the fit surface a vertex is pushed to
+
+
+@dataclass
+class CrdlResult:
+    """Deformed vertices [V,3] and what the run measured."""
+
+    vertices: np.ndarray
+    arap_energy: float
+    handle_rmse: float
+    objective: float
+    iterations: int
+    wall_seconds: float
+    history: list[float] = field(default_factory=list)
+
+    def report(self, penetration: float, solver: str) -> dict:
+        """The ``--report`` document."""
+        return {"solver": solver, "arap_energy": self.arap_energy, "handle_rmse": self.handle_rmse,
+                "penetration": penetration, "objective": self.objective, "iterations": self.iterations,
+                "wall_seconds": self.wall_seconds, "objective_history": self.history}
+
+
+class _Interleaved:
+    """LU factors of a 3V x 3V matrix ordered x0 y0 z0 x1 ..., solving right-hand sides given as [V,3]."""
+
+    def __init__(self, factor):
+        self.factor = factor
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        return self.factor.solve(np.ascontiguousarray(rhs).reshape(-1)).reshape(-1, 3)
+
+
+@dataclass
+class Contacts:
+    """Vertices ``index`` [k] with their closest fit-surface points and outward normals [k,3], held fixed."""
+
+    index: torch.Tensor
+    closest: torch.Tensor
+    normal: torch.Tensor
+
+    def deficit(self, vertices: torch.Tensor, margin: float) -> torch.Tensor:
+        """How far each of these vertices is short of ``margin`` outside [k] (see ``fit_deficit``)."""
+        return fit_deficit(vertices[self.index], self.closest, self.normal, margin)
+
+
+class _FactoredSolve(torch.autograd.Function):
+    """x = A^-1 b for a fixed symmetric A given by its LU factors; dL/db = A^-1 dL/dx."""
+
+    @staticmethod
+    def forward(ctx, rhs: torch.Tensor, factor) -> torch.Tensor:
+        ctx.factor = factor
+        return torch.from_numpy(factor.solve(rhs.detach().numpy()))
+
+    @staticmethod
+    def backward(ctx, grad: torch.Tensor):
+        return torch.from_numpy(ctx.factor.solve(grad.contiguous().numpy())), None
+
+
+class Crdl:
+    """The layer for one template: rest ``vertices`` [V,3], ``faces`` [F,3], handle vertex indices
+    [H] (the feature lines' vertices, in the order of the targets), an optional fit surface."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, handles: np.ndarray,
+                 surface: FitSurface | None = None, weights: CrdlWeights | None = None, silhouette=None):
+        self.weights = weights or CrdlWeights()
+        self.system = arap_system(vertices, faces)
+        self.faces = np.asarray(faces, np.int64)
+        self.handles = torch.as_tensor(np.asarray(handles, np.int64))
+        self.surface = surface
+        self.silhouette = None if silhouette is None else silhouette.bind(faces)
+        count = self.system.vertex_count
+        selector = sp.csr_matrix((np.ones(len(handles)), (np.arange(len(handles)), np.asarray(handles))),
+                                 shape=(len(handles), count))
+        self._incidence_t = torch.sparse_coo_tensor(*_coo(self.system.incidence().T.tocoo()), check_invariants=True)
+        # The silhouette term enters as a proximal-gradient step: its gradient at p_k plus
+        # (1/tau) |p - p_k|^2, which keeps the matrix constant.
+        self._proximal = SILHOUETTE_PROXIMAL if self._uses_silhouette() else 0.0
+        self._matrix = (self.system.laplacian() + self.weights.handle * (selector.T @ selector)
+                        + self._proximal * sp.identity(count)).tocsc()
+        self._factor = splu(self._matrix)
+
+    def _uses_silhouette(self) -> bool:
+        return self.silhouette is not None and self.weights.silhouette > 0
+
+    # -- the objective ------------------------------------------------------------------------------
+    def _contacts(self, vertices: torch.Tensor, among: torch.Tensor | None = None) -> Contacts | None:
+        """Closest fit-surface points and normals of the vertices ``among`` (all by default) at ``vertices``."""
+        if self.surface is None:
+            return None
+        index = torch.arange(self.system.vertex_count) if among is None else among
+        _, closest, normal = self.surface.query(vertices.detach()[index].numpy(), winding=False)
+        return Contacts(index, torch.as_tensor(closest), torch.as_tensor(normal))
+
+    def objective(self, vertices: torch.Tensor, targets: torch.Tensor, contacts: Contacts | None = None,
+                  rotations=None, silhouette: bool = True) -> torch.Tensor:
+        """E(p); best rotations (detached) unless given; the fit term over ``contacts``; the
+        silhouette term unless ``silhouette`` is False."""
+        w = self.weights
+        total = arap_energy(self.system, vertices, rotations) + w.handle * (vertices[self.handles] - targets).square().sum()
+        if contacts is not None:
+            total = total + w.fit * contacts.deficit(vertices, w.margin).square().sum()
+        if silhouette and self._uses_silhouette():
+            total = total + w.silhouette * self.silhouette.loss(vertices)
+        return total
+
+    def _result(self, vertices: torch.Tensor, targets: torch.Tensor, iterations: int, start: float,
+                history: list[float]) -> CrdlResult:
+        with torch.no_grad():
+            p = vertices.detach()
+            objective = float(self.objective(p, targets.detach(), self._contacts(p)))
+            rmse = float((p[self.handles] - targets.detach()).square().sum(1).mean().sqrt())
+            energy = float(arap_energy(self.system, p))
+        return CrdlResult(p.numpy().copy(), energy, rmse, objective, iterations, time.perf_counter() - start, history)
+
+    # -- the local-global solver ----------------------------------------------------------------------
+    def _factor_for(self, contacts: Contacts | None):
+        """Factors of the global step's matrix: A (ARAP and handles, factored once, the same for x,
+        y and z), plus w_f n_i n_i^T on the diagonal block of every vertex in the contact set (then
+        the 3V x 3V matrix is factored, once per contact round)."""
+        if contacts is None or len(contacts.index) == 0:
+            return self._factor
+        count = self.system.vertex_count
+        rows = (3 * contacts.index.numpy())[:, None, None] + np.arange(3)[None, :, None]
+        cols = (3 * contacts.index.numpy())[:, None, None] + np.arange(3)[None, None, :]
+        blocks = self.weights.fit * contacts.normal.numpy()[:, :, None] * contacts.normal.numpy()[:, None, :]
+        contact = sp.csc_matrix((blocks.reshape(-1), (np.broadcast_to(rows, blocks.shape).reshape(-1),
+                                                       np.broadcast_to(cols, blocks.shape).reshape(-1))), shape=(3 * count,) * 2)
+        return _Interleaved(splu((sp.kron(self._matrix, sp.identity(3)) + contact).tocsc()))
+
+    def _local_step(self, p: torch.Tensor, targets: torch.Tensor, handle_rhs: torch.Tensor,
+                    contacts: Contacts | None, factor):
+        """At p: E(p) (best R) and G(p), the solution of the global step: ARAP at fixed R, handles,
+        and w_f (n_i . (p_i - z_i))^2 over the contact set, z_i = p_i + (m - s_i)^+ n_i the nearest
+        point of vertex i's feasible half-space. That term is at least the squared distance to the
+        half-space, so the step majorises E and never increases it; it holds the vertex along n_i
+        only, leaving it free to slide along the body."""
+        w = self.weights
+        rotations = best_rotations(self.system, p)
+        value = self.objective(p, targets, contacts, rotations, silhouette=False).detach()
+        rhs = torch.sparse.mm(self._incidence_t, self.system.weights[:, None] * rotated_rest_spokes(self.system, rotations))
+        rhs = rhs + handle_rhs
+        if contacts is not None and len(contacts.index):
+            n = contacts.normal
+            height = (p[contacts.index] * n).sum(1) + contacts.deficit(p, w.margin)
+            rhs = rhs.index_add(0, contacts.index, w.fit * height[:, None] * n)
+        if self._uses_silhouette():
+            loss, gradient = self.silhouette.value_and_gradient(p)
+            value = value + w.silhouette * loss
+            rhs = rhs + self._proximal * p - w.silhouette * gradient / 2
+        return value, _FactoredSolve.apply(rhs, factor)
+
+    def _descend(self, p, targets, handle_rhs, contacts, iterations: int, tolerance: float, memory: int = 5):
+        """Local-global steps p <- G(p) at a fixed contact set, Anderson-accelerated (Peng et al.
+        2018): the candidate g_k - dG gamma, gamma = argmin |f_k - dF gamma| over the last ``memory``
+        steps (f = G(p) - p), is taken only if it lowers E, else the plain step (and the history
+        restarts). Stops when E falls by less than ``tolerance`` (relative) in a step."""
+        factor = self._factor_for(contacts)
+        value, g = self._local_step(p, targets, handle_rhs, contacts, factor)
+        history, dg, df = [float(value)], [], []
+        f_previous = g_previous = None
+        for _ in range(iterations):
+            f = g - p
+            if f_previous is not None:
+                df, dg = (df + [(f - f_previous).reshape(-1)])[-memory:], (dg + [(g - g_previous).reshape(-1)])[-memory:]
+            f_previous, g_previous = f, g
+            candidate = g
+            if df:
+                gamma = torch.linalg.lstsq(torch.stack(df, 1), f.reshape(-1, 1)).solution
+                candidate = g - (torch.stack(dg, 1) @ gamma).reshape(g.shape)
+            new_value, new_g = self._local_step(candidate, targets, handle_rhs, contacts, factor)
+            if df and float(new_value) >= float(value):  # not a descent: the plain step, a fresh history
+                candidate, df, dg, f_previous = g, [], [], None
+                new_value, new_g = self._local_step(candidate, targets, handle_rhs, contacts, factor)
+            decrease = float(value) - float(new_value)
+            p, value, g = candidate, new_value, new_g
+            history.append(float(value))
+            if decrease < tolerance * abs(float(value)):
+                break
+        return p, history
+
+    def deform(self, targets: torch.Tensor, iterations: int = 300, tolerance: float = 1e-5,
+               start: torch.Tensor | None = None) -> torch.Tensor:
+        """The local-global solution from ``start`` (the rest shape); differentiable in ``targets`` [H,3]."""
+        return self._local_global(targets, iterations, tolerance, start)[0]
+
+    def _local_global(self, targets: torch.Tensor, iterations: int, tolerance: float, start=None,
+                      rounds: int = 6):
+        """Contact rounds: descend with the contact set fixed (and its half-spaces), then add every
+        vertex short of the margin and re-query the set's closest points; stop when a round adds
+        none (or after ``rounds``). A vertex once in contact stays in the set (its term is zero
+        while it is clear), so the set only grows and E of every round majorises the next."""
+        handle_rhs = torch.zeros_like(self.system.rest).index_add(0, self.handles, self.weights.handle * targets)
+        p = (self.system.rest if start is None else start).clone()
+        history, in_contact = [], torch.zeros(self.system.vertex_count, dtype=torch.bool)
+        contacts, round_tolerance = None, max(tolerance, ROUND_TOLERANCE) if self.surface is not None else tolerance
+        for _ in range(rounds):
+            if self.surface is not None:
+                everyone = self._contacts(p)
+                short = everyone.deficit(p.detach(), self.weights.margin) > 0
+                if history and not (short & ~in_contact).any():
+                    if round_tolerance <= tolerance:
+                        break
+                    round_tolerance = tolerance  # the set is complete: one last round to full tolerance
+                in_contact |= short
+                contacts = self._contacts(p, torch.nonzero(in_contact).flatten())
+            p, steps = self._descend(p, targets, handle_rhs, contacts, iterations - len(history), round_tolerance)
+            history += steps
+            if self.surface is None or len(history) >= iterations:
+                break
+        return p, len(history), history
+
+    def solve_local_global(self, targets: np.ndarray, iterations: int = 300, tolerance: float = 1e-5) -> CrdlResult:
+        """The fast default (see ``_local_global``)."""
+        start = time.perf_counter()
+        target = torch.as_tensor(np.asarray(targets, np.float64))
+        with torch.no_grad():
+            p, done, history = self._local_global(target, iterations, tolerance)
+        return self._result(p, target, done, start, history)
+
+    def solve_adam(self, targets: np.ndarray, iterations: int = 2000, learning_rate: float = 1e-3,
+                   requery: int = 10, progress: bool = False) -> CrdlResult:
+        """The paper's solver: the vertices are a parameter, Adam minimises E (fit contacts
+        re-queried every ``requery`` steps, the learning rate decayed tenfold over the run)."""
+        from tqdm import tqdm
+
+        start = time.perf_counter()
+        target = torch.as_tensor(np.asarray(targets, np.float64))
+        p = torch.nn.Parameter(self.system.rest.clone())
+        optimiser = torch.optim.Adam([p], lr=learning_rate)
+        schedule = torch.optim.lr_scheduler.ExponentialLR(optimiser, gamma=0.1 ** (1.0 / iterations))
+        contacts, history = None, []
+        for step in tqdm(range(iterations), desc="adam", unit="step", disable=not progress, leave=False):
+            if step % requery == 0:
+                contacts = self._contacts(p)
+            optimiser.zero_grad()
+            loss = self.objective(p, target, contacts)
+            loss.backward()
+            optimiser.step()
+            schedule.step()
+            history.append(float(loss.detach()))
+        return self._result(p, target, iterations, start, history)
+
+
+def _coo(matrix: sp.coo_matrix):
+    indices = torch.as_tensor(np.stack([matrix.row, matrix.col]).astype(np.int64))
+    return indices, torch.as_tensor(matrix.data, dtype=torch.float64), matrix.shape

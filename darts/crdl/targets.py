@@ -1,0 +1,151 @@
+"""Target feature lines for the CRDL: procedural edits of a template's own lines, or loops read from
+a ``lines.npz``, and their arc-length correspondence with the template's line vertices.
+
+All points are in the template's frame (the body's canonical frame, Y up), metres. A target loop
+has no vertex correspondence with the template: template line vertex k, at arc-length fraction s_k
+of its loop, is matched to the point at fraction s_k (+ the best shift, in the best direction) of
+the target loop.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from darts.errors import DartsInputError
+from darts.templates.categories import CATEGORIES
+
+#: Edit name -> (what it changes, the lines it applies to). "length" moves a line along its loop's
+#: axis, away from the garment (lengthens for > 0); "width" moves every point away from the loop's
+#: centre in the loop's plane (widens for > 0).
+EDITS = {
+    "hem": ("length", ("hem", "left_hem", "right_hem")),
+    "sleeve": ("length", ("left_cuff", "right_cuff")),
+    "neckline": ("width", ("neckline",)),
+    "waist": ("width", ("waist",)),
+    "hem_width": ("width", ("hem", "left_hem", "right_hem")),
+    "cuff_width": ("width", ("left_cuff", "right_cuff")),
+}
+MAX_EDIT = 0.5  # metres
+
+
+def parse_edit(text: str) -> tuple[str, float]:
+    """'NAME=+0.10' -> ('NAME', 0.10), NAME one of EDITS."""
+    name, sep, value = text.partition("=")
+    name = name.strip()
+    if not sep or name not in EDITS:
+        raise DartsInputError(None, f"--edit expects NAME=METRES with NAME one of {', '.join(EDITS)}, got '{text}'")
+    try:
+        amount = float(value)
+    except ValueError:
+        raise DartsInputError(None, f"--edit {text}: '{value}' is not a number of metres") from None
+    if not np.isfinite(amount) or abs(amount) > MAX_EDIT:
+        raise DartsInputError(None, f"--edit {text}: the amount must be finite and at most {MAX_EDIT} m in size")
+    return name, amount
+
+
+def loop_frame(points: np.ndarray, garment_centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(centre [3], unit axis [3]) of a closed loop: its mean, and the normal of its best-fit plane
+    (least principal direction) pointing away from the garment's centre."""
+    centre = points.mean(0)
+    axis = np.linalg.svd(points - centre, full_matrices=False)[2][2]
+    return centre, axis if np.dot(axis, centre - garment_centre) >= 0 else -axis
+
+
+def edited_loop(points: np.ndarray, kind: str, amount: float, garment_centre: np.ndarray) -> np.ndarray:
+    """The loop moved ``amount`` along its axis ("length") or away from its centre in its plane ("width")."""
+    centre, axis = loop_frame(points, garment_centre)
+    if kind == "length":
+        return points + amount * axis
+    radial = points - centre
+    radial -= np.outer(radial @ axis, axis)
+    return points + amount * radial / np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
+
+
+def edit_targets(category: str, vertices: np.ndarray, lines: dict[str, np.ndarray],
+                 edits: list[tuple[str, float]]) -> dict[str, np.ndarray]:
+    """Target loops [K,3] for every line of the template (``vertices`` [V,3], ``lines`` vertex loops),
+    edits applied in order; lines no edit names stay where they are."""
+    targets = {name: vertices[loop].astype(np.float64) for name, loop in lines.items()}
+    centre = vertices.mean(0)
+    for name, amount in edits:
+        kind, names = EDITS[name]
+        hit = [n for n in names if n in targets]
+        if not hit:
+            raise DartsInputError(None, f"--edit {name}: a {category} has no {' or '.join(names)} line "
+                                        f"(its lines: {', '.join(lines)})")
+        if name == "sleeve" and not CATEGORIES[category].sleeved:
+            raise DartsInputError(None, f"--edit sleeve: a {category} has no sleeves")
+        for n in hit:
+            targets[n] = edited_loop(targets[n], kind, amount, centre)
+    return targets
+
+
+def read_target_lines(path: str | os.PathLike, category: str, line_names: list[str]) -> dict[str, np.ndarray]:
+    """Target loops from ``lines.npz``: one [K,3] array (K >= 3, metres, canonical frame) per line
+    name, each a line of ``category``."""
+    from darts.fileio import read_npz
+
+    arrays = read_npz(path)
+    if not arrays:
+        raise DartsInputError(path, "holds no lines")
+    targets = {}
+    for name, value in arrays.items():
+        if name not in line_names:
+            raise DartsInputError(path, f"line '{name}' is not a line of a {category} (its lines: {', '.join(line_names)})")
+        points = np.asarray(value)
+        if points.ndim != 2 or points.shape[1] != 3 or len(points) < 3:
+            raise DartsInputError(path, f"line '{name}' must be [K,3] points with K >= 3, got shape {points.shape}")
+        if not np.issubdtype(points.dtype, np.number) or not np.isfinite(points).all():
+            raise DartsInputError(path, f"line '{name}' has non-finite or non-numeric values")
+        targets[name] = points.astype(np.float64)
+    return targets
+
+
+def arc_fractions(points: np.ndarray) -> np.ndarray:
+    """Arc-length fraction [K] in [0, 1) of each vertex of a closed loop, from its first vertex."""
+    steps = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
+    return np.concatenate([[0.0], np.cumsum(steps)[:-1]]) / max(steps.sum(), 1e-12)
+
+
+def _sample_indices(target_fractions: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For fractions ``at``: the target segment (k, k+1 mod M) containing each and the weight of k+1."""
+    at = np.mod(at, 1.0)
+    k = np.clip(np.searchsorted(target_fractions, at, side="right") - 1, 0, len(target_fractions) - 1)
+    ends = np.append(target_fractions[1:], 1.0)
+    t = (at - target_fractions[k]) / np.maximum(ends[k] - target_fractions[k], 1e-12)
+    return k, (k + 1) % len(target_fractions), np.clip(t, 0.0, 1.0)
+
+
+@dataclass
+class Correspondence:
+    """Template line vertex k <- (1 - t_k) target[first_k] + t_k target[second_k]."""
+
+    first: np.ndarray
+    second: np.ndarray
+    weight: np.ndarray
+
+    def points(self, target: torch.Tensor) -> torch.Tensor:
+        """The matched target points [K,3] (differentiable in ``target`` [M,3])."""
+        t = torch.as_tensor(self.weight, dtype=target.dtype)[:, None]
+        return (1 - t) * target[self.first] + t * target[self.second]
+
+
+def correspond(template_points: np.ndarray, target: np.ndarray, shifts: int = 256) -> Correspondence:
+    """Arc-length correspondence of a template loop [K,3] with a target loop [M,3]: both directions
+    of the target and ``shifts`` start offsets are tried; the one closest in sum of squares wins."""
+    fractions = arc_fractions(template_points)
+    best, best_cost = None, np.inf
+    for direction in (1, -1):
+        order = np.arange(len(target))[::direction]
+        ordered = target[order]
+        target_fractions = arc_fractions(ordered)
+        for shift in np.arange(shifts) / shifts:
+            first, second, weight = _sample_indices(target_fractions, fractions + shift)
+            matched = (1 - weight)[:, None] * ordered[first] + weight[:, None] * ordered[second]
+            cost = np.square(matched - template_points).sum()
+            if cost < best_cost:
+                best, best_cost = Correspondence(order[first], order[second], weight), cost
+    return best

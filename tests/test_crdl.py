@@ -1,0 +1,188 @@
+"""The CRDL: ARAP energy and rotations, arc-length targets, the local-global and Adam solvers,
+gradients to the targets, the hull term, the silhouette term and `darts deform`."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+import trimesh
+
+from darts.crdl.arap import arap_energy, arap_system, best_rotations
+from darts.crdl.deform import deform_dart, weld_garment
+from darts.crdl.layer import Crdl, CrdlWeights
+from darts.crdl.silhouette import Camera, Silhouette
+from darts.crdl.targets import correspond, edit_targets, loop_frame
+from darts.dart.build import make_dart
+from darts.dart.io import load_dart, save_dart
+from darts.errors import DartsInputError
+
+COARSE = 0.025  # metres: templates of a few hundred vertices keep these tests fast
+
+
+@pytest.fixture(scope="module")
+def coarse_top(body):
+    return make_dart("short-sleeve-top", body, edge_length=COARSE)
+
+
+@pytest.fixture(scope="module")
+def coarse_skirt(body):
+    return make_dart("long-skirt", body, edge_length=COARSE)
+
+
+def _rotation(angle: float, axis) -> np.ndarray:
+    return trimesh.transformations.rotation_matrix(angle, axis)[:3, :3]
+
+
+def test_arap_energy_is_zero_for_rigid_motion_and_positive_for_a_stretch():
+    sphere = trimesh.creation.icosphere(2)
+    system = arap_system(sphere.vertices, sphere.faces)
+    moved = torch.as_tensor(sphere.vertices @ _rotation(0.7, [1, 2, 3]).T + [0.3, -0.1, 2.0])
+    assert float(arap_energy(system, system.rest)) < 1e-20
+    assert float(arap_energy(system, moved)) < 1e-20
+    stretched = system.rest * torch.tensor([1.2, 1.0, 1.0], dtype=torch.float64)
+    assert float(arap_energy(system, stretched)) > 1e-3
+
+
+def test_rotations_are_rotations_even_for_a_mirrored_mesh_and_both_backends_agree():
+    sphere = trimesh.creation.icosphere(2)
+    system = arap_system(sphere.vertices, sphere.faces)
+    generator = torch.Generator().manual_seed(0)
+    mirrored = (system.rest + 0.02 * torch.randn(system.rest.shape, generator=generator, dtype=torch.float64))
+    mirrored[:, 0] *= -1
+    with torch.no_grad():
+        warp_rotations = best_rotations(system, mirrored)
+    torch_rotations = best_rotations(system, mirrored.clone().requires_grad_(True)).detach()
+    assert torch.allclose(warp_rotations, torch_rotations, atol=1e-10)
+    assert torch.allclose(torch.linalg.det(warp_rotations), torch.ones(system.vertex_count, dtype=torch.float64), atol=1e-9)
+
+
+def test_arc_length_correspondence_finds_shift_and_direction():
+    angle = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    template = np.stack([np.cos(angle), np.zeros_like(angle), np.sin(angle)], 1)
+    fine = np.linspace(0, 2 * np.pi, 173, endpoint=False) + 1.3
+    target = np.stack([np.cos(-fine), np.zeros_like(fine), np.sin(-fine)], 1) * 1.1  # other start, reversed, wider
+    match = correspond(template, target).points(torch.as_tensor(target)).numpy()
+    assert np.abs(np.linalg.norm(match - template, axis=1) - 0.1).max() < 0.002
+
+
+def test_length_edit_moves_the_hem_down_and_width_edit_widens_the_waist(coarse_top, coarse_skirt):
+    garment = weld_garment(coarse_top)
+    hem = garment.vertices[garment.lines["hem"]]
+    moved = edit_targets("short-sleeve-top", garment.vertices, garment.lines, [("hem", 0.10)])["hem"]
+    assert np.allclose(moved - hem, [0.0, -0.10, 0.0], atol=0.01)  # the hem's axis points down (Y up)
+    skirt = weld_garment(coarse_skirt)
+    waist = skirt.vertices[skirt.lines["waist"]]
+    wider = edit_targets("long-skirt", skirt.vertices, skirt.lines, [("waist", 0.04)])["waist"]
+    centre, _ = loop_frame(waist, skirt.vertices.mean(0))
+    radius = lambda points: np.linalg.norm((points - centre)[:, [0, 2]], axis=1).mean()  # noqa: E731
+    assert radius(wider) - radius(waist) == pytest.approx(0.04, abs=0.003)
+    with pytest.raises(DartsInputError, match="no waist"):
+        edit_targets("short-sleeve-top", garment.vertices, garment.lines, [("waist", 0.04)])
+
+
+def test_local_global_is_differentiable_in_the_targets():
+    """gradcheck of a few local-global iterations on a small irregular mesh."""
+    mesh = trimesh.creation.icosphere(1)
+    vertices = mesh.vertices * [1.0, 0.8, 0.6] + 0.01 * np.random.default_rng(0).normal(size=mesh.vertices.shape)
+    handles = np.array([0, 5, 11])
+    layer = Crdl(vertices, mesh.faces, handles, weights=CrdlWeights(handle=50.0))
+    targets = torch.as_tensor(vertices[handles] + [[0.2, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, -0.1]]).requires_grad_(True)
+    assert torch.autograd.gradcheck(lambda t: layer.deform(t, iterations=4, tolerance=0.0), (targets,), eps=1e-6, atol=1e-5)
+
+
+def test_local_global_matches_adam_on_a_lengthened_top(body, coarse_top):
+    garment = weld_garment(coarse_top)
+    targets = edit_targets(coarse_top.category, garment.vertices, garment.lines, [("hem", 0.06), ("sleeve", -0.03)])
+    fast, fast_report = deform_dart(coarse_top, body, targets, "local-global", clearance=0.006)
+    slow, slow_report = deform_dart(coarse_top, body, targets, "adam", clearance=0.006, iterations=1500)
+    assert fast_report["handle_rmse"] < 0.002
+    assert fast_report["penetration"] <= 0.001
+    assert fast_report["objective"] <= 1.01 * slow_report["objective"]
+    assert fast_report["wall_seconds"] < slow_report["wall_seconds"] / 10
+    assert np.array_equal(fast.pairs, coarse_top.pairs) and fast.seams == coarse_top.seams
+    hem = fast.vertices[coarse_top.lines["hem"]][:, 1].mean() - coarse_top.vertices[coarse_top.lines["hem"]][:, 1].mean()
+    assert hem == pytest.approx(-0.06, abs=0.01)
+
+
+def test_a_lengthened_widened_skirt_stays_outside_the_legs(body, coarse_skirt):
+    """The hull term: the skirt goes around both legs, never between them."""
+    garment = weld_garment(coarse_skirt)
+    targets = edit_targets("long-skirt", garment.vertices, garment.lines, [("hem", 0.10), ("hem_width", 0.05)])
+    deformed, report = deform_dart(coarse_skirt, body, targets, clearance=0.006)
+    assert report["penetration"] <= 0.001 and report["handle_rmse"] < 0.002
+    hull = trimesh.Trimesh(coarse_skirt.hull_vertices, coarse_skirt.hull_faces)
+    assert (hull.contains(deformed.vertices.astype(np.float64))).mean() <= 0.001
+    from darts.motion.amass import load_motion
+    from scenes import resolve_motion
+    from sim.body_track import build_body_track
+    from sim.run import simulate
+    from sim.settings import SimSettings
+
+    track = build_body_track(body, load_motion(resolve_motion("walk")), 30.0, 0.5)
+    track.vertices = track.vertices[:track.settle_frames + 10]
+    run = simulate(deformed, track, SimSettings(solver="mass-spring"))
+    assert run.stable and len(run.frames) == 10
+    assert max(frame["penetration"] for frame in run.frames) <= 0.01
+
+
+def test_silhouette_term_pulls_the_garment_towards_the_mask(body, coarse_skirt):
+    """A mask rendered from a wider skirt: with the silhouette term the result covers more of it."""
+    garment = weld_garment(coarse_skirt)
+    camera = Camera(64, 64, 75.0, 75.0, 32.0, 32.0, np.diag([1.0, -1.0, -1.0]), np.array([0.0, -0.5, 1.6]))
+    wider = edit_targets("long-skirt", garment.vertices, garment.lines, [("hem_width", 0.08)])
+    target_shape, _ = deform_dart(coarse_skirt, body, wider, clearance=0.006)
+    welded_target = weld_garment(target_shape).vertices
+    mask = Silhouette(np.ones((64, 64)), camera, garment.faces).render(torch.as_tensor(welded_target)).numpy() > 0.5
+    same = {name: garment.vertices[loop] for name, loop in garment.lines.items()}
+    plain, _ = deform_dart(coarse_skirt, body, same)
+    guided, _ = deform_dart(coarse_skirt, body, same, weights=CrdlWeights(silhouette=20.0),
+                            silhouette=Silhouette(mask, camera))
+    term = Silhouette(mask, camera, garment.faces)
+    loss = lambda dart: float(term.loss(torch.as_tensor(weld_garment(dart).vertices)))  # noqa: E731
+    assert loss(guided) < loss(plain) - 0.02
+
+
+def test_darts_deform_cli_writes_a_dart_and_a_report(run_darts, tmp_path, coarse_top):
+    source = tmp_path / "top.npz"
+    save_dart(coarse_top, source)
+    out, report = tmp_path / "out.npz", tmp_path / "report.json"
+    code, _, err = run_darts("deform", str(source), "-o", str(out), "--edit", "hem=+0.05", "--edit", "neckline=+0.02",
+                             "--report", str(report))
+    assert code == 0, err
+    numbers = json.loads(report.read_text())
+    assert {"arap_energy", "handle_rmse", "penetration", "iterations", "wall_seconds"} <= set(numbers)
+    assert numbers["handle_rmse"] < 0.002 and numbers["penetration"] <= 0.001
+    deformed = load_dart(out)
+    assert len(deformed.vertices) == len(coarse_top.vertices) and np.isfinite(deformed.vertices).all()
+
+
+@pytest.mark.parametrize("make_input, message", [
+    (lambda d: np.savez(d / "lines.npz", waist=np.zeros((10, 3))), "not a line of a short-sleeve-top"),
+    (lambda d: np.savez(d / "lines.npz", hem=np.full((10, 3), np.nan)), "non-finite"),
+    (lambda d: np.savez(d / "lines.npz", hem=np.zeros((10, 2))), "must be \\[K,3\\]"),
+])
+def test_darts_deform_rejects_bad_lines(run_darts, tmp_path, coarse_top, make_input, message):
+    source = tmp_path / "top.npz"
+    save_dart(coarse_top, source)
+    make_input(tmp_path)
+    out = tmp_path / "out.npz"
+    code, _, err = run_darts("deform", str(source), "-o", str(out), "--lines", str(tmp_path / "lines.npz"))
+    assert code == 2 and "lines.npz" in err and len(err.strip().splitlines()) == 1
+    assert __import__("re").search(message, err)
+    assert not out.exists()
+
+
+def test_darts_deform_rejects_a_mask_of_the_wrong_size(run_darts, tmp_path, coarse_top):
+    from PIL import Image
+
+    source = tmp_path / "top.npz"
+    save_dart(coarse_top, source)
+    Image.fromarray(np.full((40, 50), 255, np.uint8)).save(tmp_path / "mask.png")
+    (tmp_path / "camera.json").write_text(json.dumps({"width": 64, "height": 64, "fx": 80, "fy": 80, "cx": 32, "cy": 32,
+                                                      "rotation": np.eye(3).tolist(), "translation": [0, 0, 2]}))
+    out = tmp_path / "out.npz"
+    code, _, err = run_darts("deform", str(source), "-o", str(out), "--edit", "hem=0.05",
+                             "--mask", str(tmp_path / "mask.png"), "--camera", str(tmp_path / "camera.json"))
+    assert code == 2 and "50x40 pixels but the camera is 64x64" in err and not out.exists()
