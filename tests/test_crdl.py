@@ -17,6 +17,7 @@ from darts.crdl.targets import correspond, edit_targets, loop_frame
 from darts.dart.build import make_dart
 from darts.dart.io import load_dart, save_dart
 from darts.errors import DartsInputError
+from darts.geometry.distance import SurfaceDistance
 
 COARSE = 0.025  # metres: templates of a few hundred vertices keep these tests fast
 
@@ -112,8 +113,8 @@ def test_a_lengthened_widened_skirt_stays_outside_the_legs(body, coarse_skirt):
     targets = edit_targets("long-skirt", garment.vertices, garment.lines, [("hem", 0.10), ("hem_width", 0.05)])
     deformed, report = deform_dart(coarse_skirt, body, targets, clearance=0.006)
     assert report["penetration"] <= 0.001 and report["handle_rmse"] < 0.002
-    hull = trimesh.Trimesh(coarse_skirt.hull_vertices, coarse_skirt.hull_faces)
-    assert (hull.contains(deformed.vertices.astype(np.float64))).mean() <= 0.001
+    hull = SurfaceDistance(coarse_skirt.hull_vertices, coarse_skirt.hull_faces)
+    assert (hull.query(deformed.vertices)[0] < 0).mean() <= 0.001
     from darts.motion.amass import load_motion
     from scenes import resolve_motion
     from sim.body_track import build_body_track
