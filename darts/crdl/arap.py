@@ -71,14 +71,13 @@ def arap_system(vertices: np.ndarray, faces: np.ndarray) -> ArapSystem:
                       rest[heads_t] - rest[tails_t])
 
 
-@wp.kernel
-def _rotations_from_covariances(covariance: wp.array(dtype=wp.mat33d), rotation: wp.array(dtype=wp.mat33d)):
-    """R = V U^T from S = U diag(s) V^T, U's column of the smallest s negated if det(R) < 0."""
-    i = wp.tid()
+@wp.func
+def nearest_rotation(covariance: wp.mat33d):
+    """V U^T from covariance = U diag(s) V^T, U's column of the smallest s negated if det < 0."""
     u = wp.mat33d()
     s = wp.vec3d()
     v = wp.mat33d()
-    wp.svd3(covariance[i], u, s, v)
+    wp.svd3(covariance, u, s, v)
     r = v * wp.transpose(u)
     if wp.determinant(r) < wp.float64(0.0):
         k = int(0)
@@ -89,7 +88,13 @@ def _rotations_from_covariances(covariance: wp.array(dtype=wp.mat33d), rotation:
         flip = wp.identity(n=3, dtype=wp.float64)
         flip[k, k] = wp.float64(-1.0)
         r = v * flip * wp.transpose(u)
-    rotation[i] = r
+    return r
+
+
+@wp.kernel
+def _rotations_from_covariances(covariance: wp.array(dtype=wp.mat33d), rotation: wp.array(dtype=wp.mat33d)):
+    i = wp.tid()
+    rotation[i] = nearest_rotation(covariance[i])
 
 
 def best_rotations(system: ArapSystem, vertices: torch.Tensor) -> torch.Tensor:

@@ -26,6 +26,7 @@ from scipy.sparse.linalg import splu
 
 from darts.crdl.arap import arap_energy, arap_system, best_rotations, rotated_rest_spokes
 from darts.crdl.fit import FitSurface, fit_deficit
+from darts.crdl.local_step import LocalStep
 
 
 #: Metres beyond the margin within which a vertex joins the contact set before the first round.
@@ -123,6 +124,7 @@ class Crdl:
         self._matrix = (self.system.laplacian() + self.weights.handle * (selector.T @ selector)
                         + self._proximal * sp.identity(count)).tocsc()
         self._factor = splu(self._matrix)
+        self._fast_local_step = LocalStep(self.system)
 
     def _uses_silhouette(self) -> bool:
         return self.silhouette is not None and self.weights.silhouette > 0
@@ -140,8 +142,13 @@ class Crdl:
                   rotations=None, silhouette: bool = True) -> torch.Tensor:
         """E(p); best rotations (detached) unless given; the fit term over ``contacts``; the
         silhouette term unless ``silhouette`` is False."""
+        return arap_energy(self.system, vertices, rotations) + self._penalties(vertices, targets, contacts, silhouette)
+
+    def _penalties(self, vertices: torch.Tensor, targets: torch.Tensor, contacts: Contacts | None,
+                   silhouette: bool) -> torch.Tensor:
+        """E(p) without its ARAP term: handles, fit over ``contacts``, silhouette if asked."""
         w = self.weights
-        total = arap_energy(self.system, vertices, rotations) + w.handle * (vertices[self.handles] - targets).square().sum()
+        total = w.handle * (vertices[self.handles] - targets).square().sum()
         if contacts is not None:
             total = total + w.fit * contacts.deficit(vertices, w.margin).square().sum()
         if silhouette and self._uses_silhouette():
@@ -183,9 +190,13 @@ class Crdl:
         half-space, so the step majorises E and never increases it; it holds the vertex along n_i
         only, leaving it free to slide along the body."""
         w = self.weights
-        rotations = best_rotations(self.system, p)
-        value = self.objective(p, targets, contacts, rotations, silhouette=False).detach()
-        rhs = torch.sparse.mm(self._incidence_t, self.system.weights[:, None] * rotated_rest_spokes(self.system, rotations))
+        if torch.is_grad_enabled():
+            rotations = best_rotations(self.system, p)
+            value = self.objective(p, targets, contacts, rotations, silhouette=False).detach()
+            rhs = torch.sparse.mm(self._incidence_t, self.system.weights[:, None] * rotated_rest_spokes(self.system, rotations))
+        else:  # the same in two Warp kernels, several times faster
+            arap, rhs = self._fast_local_step(p)
+            value = arap + self._penalties(p, targets, contacts, silhouette=False)
         rhs = rhs + handle_rhs
         if contacts is not None and len(contacts.index):
             n = contacts.normal
