@@ -6,8 +6,11 @@ triangle within reach that is not its neighbour on the rest garment, with the si
 sweep then keeps the particle ``separation`` away from that triangle's plane on that side, sharing
 the correction with the triangle's corners by inverse mass and barycentric weight (an XPBD contact
 with zero compliance). Remembering the side means a particle that has already passed the plane is
-pulled back instead of pushed through; edge-edge crossings are covered by the separation, which
-is larger than the edges' sag between vertices.
+pulled back instead of pushed through. Edges get the same treatment against the edges of the
+garment triangles near them (closest points of two segments, both inside their segments, kept
+``separation`` apart along the edges' common normal on the side they started on), which catches
+two layers whose edges slide through each other between vertices. All corrections of a sweep are
+averaged per particle before they are applied.
 """
 from __future__ import annotations
 
@@ -119,51 +122,184 @@ def pinned_weight(inverse_mass: wp.array(dtype=float), body_push: wp.array(dtype
     return inverse_mass[i]
 
 
+@wp.func
+def project_separation(index: wp.vec4i, coefficient: wp.vec4, normal: wp.vec3, separation: float, reach: float,
+                       inverse_mass: wp.array(dtype=float), body_push: wp.array(dtype=float),
+                       x: wp.array(dtype=wp.vec3), delta: wp.array(dtype=wp.vec3), hits: wp.array(dtype=float)):
+    """One contact between the points g_+ and g_- of two garment features, gap g = sum_k c_k x_k
+    (c_k > 0 on the first feature, < 0 on the second, |c| summing to 1 on each): C = |g| - separation
+    >= 0 while g points along ``normal`` (the side to keep), else C = g . n - separation; projected
+    with weights c_k^2 w_k into ``delta`` (``hits`` counts the corrections of each particle). No
+    particle moves further than the violation (a light corner under a heavy particle would), and a
+    contact more than ``reach`` behind is left alone (stale: its feature has moved on)."""
+    size = wp.length(normal)
+    if size < 1.0e-12:
+        return
+    n = normal / size
+    gap = wp.vec3(0.0)
+    for k in range(4):
+        gap += coefficient[k] * x[index[k]]
+    height = wp.dot(gap, n)
+    distance = wp.length(gap)
+    if height > 0.0 and distance > 1.0e-9:
+        n = gap / distance  # still on its side: keep the distance, also off the features' ends
+        height = distance
+    constraint = height - separation
+    if constraint >= 0.0 or height < -reach:
+        return
+    weight = float(0.0)
+    for k in range(4):
+        weight += coefficient[k] * coefficient[k] * pinned_weight(inverse_mass, body_push, index[k])
+    step = -constraint / weight
+    for k in range(4):
+        move = wp.min(pinned_weight(inverse_mass, body_push, index[k]) * wp.abs(coefficient[k]) * step, -constraint)
+        wp.atomic_add(delta, index[k], wp.sign(coefficient[k]) * move * n)
+        wp.atomic_add(hits, index[k], 1.0)
+
+
 @wp.kernel
 def resolve_self_contacts(faces: wp.array2d(dtype=wp.int32), contact_face: wp.array(dtype=wp.int32),
                           contact_bary: wp.array(dtype=wp.vec3), contact_side: wp.array(dtype=float),
                           inverse_mass: wp.array(dtype=float), body_push: wp.array(dtype=float), separation: float,
                           reach: float, x: wp.array(dtype=wp.vec3), delta: wp.array(dtype=wp.vec3),
                           hits: wp.array(dtype=float)):
-    """C = |x_i - q| - separation >= 0 with q = sum_k b_k x_k while x_i is on its side of the plane,
-    else C = side (x_i - q) . n - separation, projected with weights w_i and b_k^2 w_k into ``delta``
-    (``hits`` counts the corrections each particle gets); a particle more than ``reach`` behind the
-    plane is left alone (a stale contact, not a crossing to undo)."""
+    """Particle i against the point q = sum_k b_k x_k of its triangle: ``project_separation`` with
+    gap x_i - q, kept on its side of the triangle's plane."""
     i = wp.tid()
     face = contact_face[i]
     if face < 0 or contact_side[i] == 0.0:
         return
     bary = contact_bary[i]
     a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
-    xa, xb, xc = x[a], x[b], x[c]
-    scaled = wp.cross(xb - xa, xc - xa)
-    area2 = wp.length(scaled)
-    if area2 < 1.0e-12:
+    project_separation(wp.vec4i(i, a, b, c), wp.vec4(1.0, -bary[0], -bary[1], -bary[2]),
+                       contact_side[i] * wp.cross(x[b] - x[a], x[c] - x[a]), separation, reach, inverse_mass,
+                       body_push, x, delta, hits)
+
+
+@wp.func
+def closest_between_segments(p1: wp.vec3, q1: wp.vec3, p2: wp.vec3, q2: wp.vec3):
+    """Parameters (s, t) of the closest points p1 + s (q1 - p1) and p2 + t (q2 - p2) of two
+    segments of non-zero length (Ericson 5.1.9)."""
+    d1 = q1 - p1
+    d2 = q2 - p2
+    r = p1 - p2
+    a = wp.dot(d1, d1)
+    e = wp.dot(d2, d2)
+    f = wp.dot(d2, r)
+    c = wp.dot(d1, r)
+    b = wp.dot(d1, d2)
+    denominator = a * e - b * b
+    s = float(0.0)
+    if denominator > 1.0e-12 * a * e:
+        s = wp.clamp((b * f - c * e) / denominator, 0.0, 1.0)
+    t = (b * s + f) / e
+    if t < 0.0:
+        t = 0.0
+        s = wp.clamp(-c / a, 0.0, 1.0)
+    elif t > 1.0:
+        t = 1.0
+        s = wp.clamp((b - c) / a, 0.0, 1.0)
+    return wp.vec2(s, t)
+
+
+@wp.func
+def inside_both(st: wp.vec2):
+    """Are both closest points strictly inside their segments (else a vertex is the closest point,
+    and the vertex-triangle contact has it)."""
+    return st[0] > 1.0e-4 and st[0] < 1.0 - 1.0e-4 and st[1] > 1.0e-4 and st[1] < 1.0 - 1.0e-4
+
+
+@wp.func
+def edge_near_on_rest(rest: wp.array(dtype=wp.vec3), a: int, b: int, c: int, d: int, exclusion: float):
+    """Is an end of edge cd within ``exclusion`` of an end of edge ab on the rest garment."""
+    return (wp.length(rest[c] - rest[a]) < exclusion or wp.length(rest[d] - rest[a]) < exclusion
+            or wp.length(rest[c] - rest[b]) < exclusion or wp.length(rest[d] - rest[b]) < exclusion)
+
+
+@wp.func
+def edge_candidate(edges: wp.array2d(dtype=wp.int32), rest: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3),
+                   a: int, b: int, other: int, exclusion: float):
+    """(distance, s, t) from edge ab to edge ``other`` = cd; distance 1e30 unless no end of cd is
+    within ``exclusion`` of a or b on the rest garment, both closest points lie inside their segments,
+    the edges are not within 6 degrees of parallel and the gap is within 60 degrees of their common
+    normal ab x cd (a neighbour in the same layer has its gap in the layer)."""
+    c, d = edges[other, 0], edges[other, 1]
+    if edge_near_on_rest(rest, a, b, c, d, exclusion):
+        return wp.vec3(1.0e30, 0.0, 0.0)
+    st = closest_between_segments(x[a], x[b], x[c], x[d])
+    if not inside_both(st):
+        return wp.vec3(1.0e30, 0.0, 0.0)
+    normal = wp.cross(x[b] - x[a], x[d] - x[c])
+    gap = wp.lerp(x[a], x[b], st[0]) - wp.lerp(x[c], x[d], st[1])
+    distance = wp.length(gap)
+    crossed = wp.length(normal) >= 0.1 * wp.length(x[b] - x[a]) * wp.length(x[d] - x[c])
+    facing = wp.abs(wp.dot(gap, wp.normalize(normal))) >= 0.5 * distance
+    if not (crossed and facing):
+        return wp.vec3(1.0e30, 0.0, 0.0)
+    return wp.vec3(distance, st[0], st[1])
+
+
+@wp.kernel
+def find_edge_contacts(faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
+                       vertex_edge_start: wp.array(dtype=wp.int32), vertex_edges: wp.array(dtype=wp.int32),
+                       contact_face: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
+                       x_start: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), reach: float, exclusion: float,
+                       partner: wp.array(dtype=wp.int32), partner_st: wp.array(dtype=wp.vec2),
+                       partner_side: wp.array(dtype=float)):
+    """For each garment edge ab, the closest edge cd (-1: none) within ``reach`` that passes
+    ``edge_candidate``, among its last partner and the edges at the corners of the triangles that
+    a's and b's vertex-triangle contacts found (the other layer, where it is near; no BVH walk); its
+    closest-point parameters, and the side along n = ab x cd to keep: from the last search for the
+    same pair, else the side at the start of the substep (``x_start``)."""
+    e = wp.tid()
+    a, b = edges[e, 0], edges[e, 1]
+    best = int(-1)
+    best_distance = reach
+    best_st = wp.vec2(0.0)
+    if partner[e] >= 0:  # the last partner stays a candidate while the vertex contacts come and go
+        candidate = edge_candidate(edges, rest, x, a, b, partner[e], exclusion)
+        if candidate[0] < best_distance:
+            best = partner[e]
+            best_distance = candidate[0]
+            best_st = wp.vec2(candidate[1], candidate[2])
+    for end in range(2):
+        face = int(contact_face[edges[e, end]])
+        if face < 0:
+            continue
+        for corner in range(3):
+            v = int(faces[face, corner])
+            for k in range(vertex_edge_start[v], vertex_edge_start[v + 1]):
+                other = int(vertex_edges[k])
+                candidate = edge_candidate(edges, rest, x, a, b, other, exclusion)
+                if candidate[0] < best_distance:
+                    best = other
+                    best_distance = candidate[0]
+                    best_st = wp.vec2(candidate[1], candidate[2])
+    if best >= 0 and best != partner[e]:
+        c, d = edges[best, 0], edges[best, 1]
+        gap = wp.lerp(x_start[a], x_start[b], best_st[0]) - wp.lerp(x_start[c], x_start[d], best_st[1])
+        partner_side[e] = wp.sign(wp.dot(gap, wp.cross(x_start[b] - x_start[a], x_start[d] - x_start[c])))
+    partner[e] = best
+    partner_st[e] = best_st
+
+
+@wp.kernel
+def resolve_edge_contacts(edges: wp.array2d(dtype=wp.int32), partner: wp.array(dtype=wp.int32),
+                          partner_st: wp.array(dtype=wp.vec2), partner_side: wp.array(dtype=float),
+                          inverse_mass: wp.array(dtype=float), body_push: wp.array(dtype=float), separation: float,
+                          reach: float, x: wp.array(dtype=wp.vec3), delta: wp.array(dtype=wp.vec3),
+                          hits: wp.array(dtype=float)):
+    """Edge ab against its partner cd: ``project_separation`` with gap lerp(a, b, s) - lerp(c, d, t),
+    kept on its side along ab x cd."""
+    e = wp.tid()
+    other = partner[e]
+    if other < 0 or partner_side[e] == 0.0:
         return
-    n = contact_side[i] * scaled / area2
-    q = bary[0] * xa + bary[1] * xb + bary[2] * xc
-    d = x[i] - q
-    height = wp.dot(d, n)
-    distance = wp.length(d)
-    if height > 0.0 and distance > 1.0e-9:
-        n = d / distance  # still on its side: keep the distance, also off the triangle's edges
-        height = distance
-    constraint = height - separation
-    if constraint >= 0.0 or height < -reach:
-        return  # apart, or so far behind that the contact is stale (its triangle has moved on)
-    wi, wa, wb, wc = (pinned_weight(inverse_mass, body_push, i), pinned_weight(inverse_mass, body_push, a),
-                      pinned_weight(inverse_mass, body_push, b), pinned_weight(inverse_mass, body_push, c))
-    weight = wi + bary[0] * bary[0] * wa + bary[1] * bary[1] * wb + bary[2] * bary[2] * wc
-    step = -constraint / weight
-    depth = -constraint  # no particle moves further than the violation (a light corner under a heavy particle would)
-    wp.atomic_add(delta, i, wp.min(wi * step, depth) * n)
-    wp.atomic_sub(delta, a, wp.min(wa * bary[0] * step, depth) * n)
-    wp.atomic_sub(delta, b, wp.min(wb * bary[1] * step, depth) * n)
-    wp.atomic_sub(delta, c, wp.min(wc * bary[2] * step, depth) * n)
-    wp.atomic_add(hits, i, 1.0)
-    wp.atomic_add(hits, a, 1.0)
-    wp.atomic_add(hits, b, 1.0)
-    wp.atomic_add(hits, c, 1.0)
+    a, b, c, d = edges[e, 0], edges[e, 1], edges[other, 0], edges[other, 1]
+    s, t = partner_st[e][0], partner_st[e][1]
+    project_separation(wp.vec4i(a, b, c, d), wp.vec4(1.0 - s, s, t - 1.0, -t),
+                       partner_side[e] * wp.cross(x[b] - x[a], x[d] - x[c]), separation, reach, inverse_mass,
+                       body_push, x, delta, hits)
 
 
 @wp.kernel
@@ -223,6 +359,14 @@ def count_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: w
             return
 
 
+def vertex_edge_lists(edges: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Edges at each vertex as CSR: vertex v's edge indices are incident[start[v]:start[v + 1]]."""
+    ends = np.asarray(edges, np.int64).reshape(-1)
+    incident = np.argsort(ends, kind="stable") // 2
+    start = np.concatenate([[0], np.cumsum(np.bincount(ends, minlength=count))])
+    return start.astype(np.int32), incident.astype(np.int32)
+
+
 class SelfContact:
     """The garment's self-contact state on the device; positions are the solver's particle array."""
 
@@ -231,6 +375,7 @@ class SelfContact:
         self.x, self.device, self.count = x, device, x.shape[0]
         self.separation, self.exclusion = float(separation), float(exclusion)
         self.reach = float(exclusion)
+        self.edge_edge = True  # edge-edge contacts too (off only to show what they add)
         self.faces = wp.array(np.ascontiguousarray(faces, np.int32), dtype=wp.int32, device=device)
         self.edges = wp.array(np.ascontiguousarray(edges, np.int32), dtype=wp.int32, device=device)
         self.rest = wp.array(np.ascontiguousarray(rest, np.float32), dtype=wp.vec3, device=device)
@@ -239,29 +384,44 @@ class SelfContact:
         self.face = wp.full(self.count, -1, dtype=wp.int32, device=device)
         self.bary = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self.side = wp.zeros(self.count, dtype=float, device=device)
+        start, incident = vertex_edge_lists(edges, self.count)
+        self.vertex_edge_start = wp.array(start, dtype=wp.int32, device=device)
+        self.vertex_edges = wp.array(incident, dtype=wp.int32, device=device)
+        self.partner = wp.full(self.edges.shape[0], -1, dtype=wp.int32, device=device)
+        self.partner_st = wp.zeros(self.edges.shape[0], dtype=wp.vec2, device=device)
+        self.partner_side = wp.zeros(self.edges.shape[0], dtype=float, device=device)
         self._delta = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self._hits = wp.zeros(self.count, dtype=float, device=device)
         self._crossing = wp.zeros(self.edges.shape[0], dtype=wp.int32, device=device)
 
     def search(self, x_start, reach: float) -> None:
-        """Refit the garment's BVH to the particles and find each one's closest non-neighbour triangle
-        (``x_start``: the positions the sides are taken from)."""
+        """Refit the garment's BVH to the particles and find each one's closest non-neighbour triangle,
+        and each edge's closest non-neighbour edge (``x_start``: the positions the sides are taken from)."""
         self.reach = float(reach)
         self.mesh.refit()
         wp.launch(find_self_contacts, dim=self.count,
                   inputs=[self.mesh.id, self.faces, self.x, x_start, self.rest, reach, self.exclusion, self.face, self.bary,
                           self.side], device=self.device)
+        if self.edge_edge:
+            wp.launch(find_edge_contacts, dim=self.edges.shape[0],
+                      inputs=[self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,
+                              x_start, self.rest, reach, self.exclusion, self.partner, self.partner_st,
+                              self.partner_side], device=self.device)
 
     def resolve(self, inverse_mass, body_push) -> None:
-        """One sweep keeping every particle ``separation`` off its triangle, on its side (particles
-        the body pushed this substep, ``body_push`` > 0, count ten times heavier), each particle
-        moved by the mean of its corrections."""
+        """One sweep keeping every particle ``separation`` off its triangle and every edge off its
+        partner edge, on their sides (particles the body pushed this substep, ``body_push`` > 0,
+        count ten times heavier), each particle moved by the mean of its corrections."""
         self._delta.zero_()
         self._hits.zero_()
         wp.launch(resolve_self_contacts, dim=self.count,
                   inputs=[self.faces, self.face, self.bary, self.side, inverse_mass, body_push, self.separation,
                           self.reach, self.x, self._delta, self._hits],
                   device=self.device)
+        if self.edge_edge:
+            wp.launch(resolve_edge_contacts, dim=self.edges.shape[0],
+                      inputs=[self.edges, self.partner, self.partner_st, self.partner_side, inverse_mass, body_push,
+                              self.separation, self.reach, self.x, self._delta, self._hits], device=self.device)
         wp.launch(apply_averaged, dim=self.count, inputs=[self._delta, self._hits, self.x], device=self.device)
 
     def crossing_edges(self) -> np.ndarray:

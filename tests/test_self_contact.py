@@ -1,4 +1,5 @@
-"""Self-contact: a folded sheet drops onto itself; no vertex may cross a triangle of its own garment."""
+"""Self-contact: a folded sheet drops onto itself, no vertex may cross a triangle of its own garment;
+a strip dropped across another, touching it only between vertices, rests on it (edge-edge contact)."""
 from __future__ import annotations
 
 import numpy as np
@@ -43,12 +44,15 @@ def _sheet_dart(vertices: np.ndarray, faces: np.ndarray) -> Dart:
                 pair_seam=np.zeros(0, np.int32), pair_position=np.zeros(0, np.float32))
 
 
+#: A tetrahedron far above everything: only the ground holds the lower layer.
+FAR_BODY = (np.array([[0.0, 0.0, 50.0], [1.0, 0.0, 50.0], [0.0, 1.0, 50.0], [0.0, 0.0, 51.0]]),
+            np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+
+
 def _drop(self_contact: bool, frames: int = 20):
     vertices, faces, upper = _folded_sheet()
     model = cloth_model(_sheet_dart(vertices, faces))
-    # The body is far away: only the ground holds the lower layer.
-    body_vertices = np.array([[0.0, 0.0, 50.0], [1.0, 0.0, 50.0], [0.0, 1.0, 50.0], [0.0, 0.0, 51.0]])
-    body_faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    body_vertices, body_faces = FAR_BODY
     settings = SimSettings(self_contact=self_contact)
     solver = ClothSolver(model, model.rest, body_faces, body_vertices, settings)
     checker = SelfContact(solver.x, model.rest, model.faces, model.edges, 0.0, solver.self_contact.exclusion, "cpu")
@@ -83,3 +87,50 @@ def test_without_self_contact_the_fold_passes_through():
     x, upper, _, thickness = _drop(False)
     over, under = _overlap(x, upper)
     assert x[over, 2].min() <= x[under, 2].max() + 0.5 * thickness
+
+
+STRIP_SPACING = 0.01  # m between a strip's rungs
+STRIP_WIDTH = 0.004  # m: narrower than the rungs are apart, so no vertex lies over the other strip
+
+
+def _strip(along_y: bool, height: float, rungs: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """A strip one quad wide through the origin along x (or y), its rungs at odd multiples of half
+    STRIP_SPACING, so that where it crosses another such strip no vertex of either lies over the other."""
+    t = (np.arange(rungs) - rungs / 2 + 0.5) * STRIP_SPACING
+    vertices = np.array([[c, s, height] if along_y else [s, c, height] for s in t for c in (-STRIP_WIDTH / 2, STRIP_WIDTH / 2)])
+    faces = []
+    for i in range(rungs - 1):
+        a, b, c, d = 2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3
+        faces += [[a, c, b], [b, c, d]] if i % 2 else [[a, c, d], [a, d, b]]
+    return vertices, np.array(faces)
+
+
+def _cross_strips(edge_edge: bool, frames: int = 20) -> tuple[float, float, float]:
+    """Drop a strip along y from 3 cm onto one along x lying on the ground; the heights (m) of the
+    upper and lower strips' particles over the crossing (mean), and the material thickness."""
+    lower, lower_faces = _strip(False, 0.003)
+    upper, upper_faces = _strip(True, 0.033)
+    model = cloth_model(_sheet_dart(np.vstack([lower, upper]), np.vstack([lower_faces, upper_faces + len(lower)])))
+    body_vertices, body_faces = FAR_BODY
+    solver = ClothSolver(model, model.rest, body_faces, body_vertices, SimSettings())
+    solver.self_contact.edge_edge = edge_edge
+    for _ in range(frames):
+        solver.step_frame(body_vertices)
+    x = solver.positions()
+    is_upper = np.zeros(len(x), bool)
+    is_upper[model.particle_of_vertex[len(lower):]] = True
+    crossing = (np.abs(x[:, 0]) < STRIP_SPACING) & (np.abs(x[:, 1]) < STRIP_SPACING)
+    return x[is_upper & crossing, 2].mean(), x[~is_upper & crossing, 2].mean(), solver.thickness
+
+
+def test_strip_rests_across_another_on_edge_contacts():
+    upper, lower, thickness = _cross_strips(edge_edge=True)
+    assert upper > lower + 0.5 * thickness  # on top, a material thickness up
+    assert upper < lower + 2.0 * thickness  # and landed (it fell 3 cm)
+
+
+def test_without_edge_contacts_the_strip_passes_through():
+    """Vertex-triangle contact alone: the strips touch only between vertices, and the upper one falls
+    through the lower one to the ground (the test above can fail)."""
+    upper, lower, thickness = _cross_strips(edge_edge=False)
+    assert upper < lower + 0.25 * thickness
