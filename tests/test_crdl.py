@@ -9,7 +9,7 @@ import pytest
 import torch
 import trimesh
 
-from darts.crdl.arap import arap_energy, arap_system, best_rotations
+from darts.crdl.arap import _rotations_from_covariances, arap_energy, arap_system, best_rotations
 from darts.crdl.deform import deform_dart, weld_garment
 from darts.crdl.layer import Crdl, CrdlWeights
 from darts.crdl.silhouette import Camera, Silhouette
@@ -18,6 +18,9 @@ from darts.dart.build import make_dart
 from darts.dart.io import load_dart, save_dart
 from darts.errors import DartsInputError
 from darts.geometry.distance import SurfaceDistance
+from darts.geometry.warp_runtime import warp
+
+wp = warp()
 
 COARSE = 0.025  # metres: templates of a few hundred vertices keep these tests fast
 
@@ -57,6 +60,25 @@ def test_rotations_are_rotations_even_for_a_mirrored_mesh_and_both_backends_agre
     torch_rotations = best_rotations(system, mirrored.clone().requires_grad_(True)).detach()
     assert torch.allclose(warp_rotations, torch_rotations, atol=1e-10)
     assert torch.allclose(torch.linalg.det(warp_rotations), torch.ones(system.vertex_count, dtype=torch.float64), atol=1e-9)
+
+
+def test_horn_rotations_equal_the_reflection_fixed_svd_for_flat_and_mirrored_covariances():
+    """Warp's quaternion (Horn) rotations against V U^T with U's smallest column flipped when
+    det < 0, for full-rank covariances of both signs and for flat (rank-2) ones, as a surface's
+    one-rings give."""
+    generator = np.random.default_rng(3)
+    covariances = generator.normal(size=(300, 3, 3))
+    covariances[100:200, :, 2] *= 1e-9  # flat: the rest spokes lie in a plane
+    covariances[200:] *= np.array([-1.0, 1.0, 1.0])[:, None]  # mirrored
+    u, _, vt = np.linalg.svd(covariances)
+    flip = np.ones((len(covariances), 3))
+    flip[:, 2] = np.sign(np.linalg.det(vt.transpose(0, 2, 1) @ u.transpose(0, 2, 1)))
+    expected = vt.transpose(0, 2, 1) @ (flip[:, :, None] * u.transpose(0, 2, 1))
+    assert (np.linalg.det(covariances) < 0).sum() > 100  # reflections are exercised
+    result = wp.zeros(len(covariances), dtype=wp.mat33d, device="cpu")
+    wp.launch(_rotations_from_covariances, dim=len(covariances),
+              inputs=[wp.array(covariances, dtype=wp.mat33d, device="cpu"), result], device="cpu")
+    assert np.abs(result.numpy() - expected).max() < 1e-10
 
 
 def test_arc_length_correspondence_finds_shift_and_direction():

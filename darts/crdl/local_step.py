@@ -2,7 +2,7 @@
 right-hand side and the ARAP energy, walking each vertex's spokes (CSR) instead of building [E,3,3]
 tensors. Same math as ``darts.crdl.arap`` (which stays the differentiable path):
 
-    R_i = polar(S_i), S_i = sum_j w_ij (r_i - r_j)(p_i - p_j)^T     (reflection fixed)
+    R_i = argmax_R tr(R S_i), S_i = sum_j w_ij (r_i - r_j)(p_i - p_j)^T   (Horn's quaternion method)
     b_i = sum_j w_ij (R_i + R_j)(r_i - r_j)                          (= K^T W (R r))
     E   = sum_i sum_j w_ij |(p_i - p_j) - R_i (r_i - r_j)|^2
 """
