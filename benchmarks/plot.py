@@ -12,8 +12,10 @@ DATA = ROOT / "docs" / "data"
 #: Kernels grouped by the part of the step they belong to.
 GROUPS = {
     "body contact search": ("find_contacts",),
-    "self-contact search": ("find_self_contacts",),
-    "contact tracking and projection": ("track_contacts", "resolve_contacts", "resolve_self_contacts", "apply_friction"),
+    "self-contact search (vertex-triangle)": ("find_self_contacts",),
+    "edge-edge contacts (candidates, projection)": ("find_edge_contacts", "resolve_edge_contacts"),
+    "contact tracking and projection": ("track_contacts", "resolve_contacts", "resolve_self_contacts", "apply_averaged",
+                                        "apply_friction"),
     "stretch and seams": ("solve_distances",),
     "bending": ("solve_bending",),
     "BVH refits": ("bvh refit",),
