@@ -72,6 +72,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--gust", type=float, default=0.0, help="relative gust strength of the wind, 0..1")
     p.add_argument("--no-ground", action="store_true", help="no ground plane at z = 0")
     p.add_argument("--no-self-contact", action="store_true", help="let the garment pass through itself (faster)")
+    p.add_argument("--no-ccd", action="store_true",
+                   help="push particles inside the body out at the closest body point only, without tracing their "
+                        "path back to the face they entered by")
     p.add_argument("--max-speed", type=float, default=defaults.max_speed,
                    help=f"m/s; a faster particle stops the run as unstable (default {defaults.max_speed:g})")
     p.add_argument("--seed", type=int, default=0, help="seed of the wind gusts (runs are deterministic)")
@@ -147,7 +150,8 @@ def _settings(args) -> SimSettings:
     substeps = args.substeps if args.substeps is not None else DEFAULT_SUBSTEPS[args.solver]
     settings = SimSettings(fps=args.fps, substeps=substeps, iterations=args.iterations, solver=args.solver,
                            device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed,
-                           max_speed=args.max_speed, self_contact=not args.no_self_contact)
+                           max_speed=args.max_speed, self_contact=not args.no_self_contact,
+                           continuous_collision=not args.no_ccd)
     try:
         settings.check()
     except ValueError as exc:

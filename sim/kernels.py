@@ -70,25 +70,63 @@ def face_frame(mesh: wp.uint64, face: int):
     return e1, wp.cross(n, e1), n
 
 
+@wp.func
+def inside_body(mesh: wp.uint64, p: wp.vec3, reach: float):
+    """Is p inside the body, less than ``reach`` from its surface (the sign of its closest point)."""
+    query = wp.mesh_query_point_sign_normal(mesh, p, reach)
+    return query.result and query.sign < 0.0
+
+
 @wp.kernel
-def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), reach: float, contact_face: wp.array(dtype=wp.int32),
-                  contact_uv: wp.array(dtype=wp.vec2), contact_local: wp.array(dtype=wp.vec3)):
+def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3), reach: float,
+                  thickness: float, continuous: int, min_path: float, elapsed: float, window_start: wp.array(dtype=wp.vec3),
+                  contact_face: wp.array(dtype=wp.int32), contact_uv: wp.array(dtype=wp.vec2),
+                  contact_local: wp.array(dtype=wp.vec3)):
     """Closest body point within ``reach`` of each particle (face, barycentrics) and the outward
-    direction there, stored in the face's own frame so that it turns with the face (face -1: none)."""
+    direction there, stored in the face's own frame so that it turns with the face (face -1: none).
+
+    With ``continuous`` set, the particle's path relative to the body since the last search,
+    o -> x with o = window_start + v_body * elapsed (the body moving locally like the closest point,
+    velocity v_body; 0 if none is within reach), is traced when it is longer than ``min_path`` (a
+    shorter one cannot have reached past the middle of a body part, so the closest point is the way
+    out) and starts outside the body: if it entered the body through a face (a ray hit on its front)
+    whose outside, ``thickness`` off the hit, is free (not inside another part where the body
+    overlaps itself), that face is the contact, so a particle that got past a thin part's middle,
+    or right through it, goes back out the side it came in. ``window_start`` then takes ``x_start``
+    (the start of this substep)."""
     i = wp.tid()
     p = x[i]
     query = wp.mesh_query_point_sign_normal(mesh, p, reach)
-    contact_face[i] = -1
+    face = int(-1)
+    uv = wp.vec2(0.0)
+    out = wp.vec3(0.0)
+    body_velocity = wp.vec3(0.0)
     if query.result:
-        e1, e2, n = face_frame(mesh, query.face)
-        c = wp.mesh_eval_position(mesh, query.face, query.u, query.v)
+        face = query.face
+        uv = wp.vec2(query.u, query.v)
+        out = wp.mesh_eval_face_normal(mesh, face)
+        c = wp.mesh_eval_position(mesh, face, query.u, query.v)
         gap = wp.length(p - c)
-        out = n
         if gap > 1.0e-6:
             out = query.sign * (p - c) / gap
-        contact_face[i] = query.face
-        contact_uv[i] = wp.vec2(query.u, query.v)
+        body_velocity = wp.mesh_eval_velocity(mesh, face, query.u, query.v)
+    if continuous != 0:
+        origin = window_start[i] + body_velocity * elapsed
+        path = p - origin
+        length = wp.length(path)
+        if length > min_path and not inside_body(mesh, origin, reach):
+            hit = wp.mesh_query_ray(mesh, origin, path / length, length)
+            if hit.result and hit.sign > 0.0 and not inside_body(mesh, origin + hit.t * path / length
+                                                                 + thickness * hit.normal, reach):
+                face = hit.face
+                uv = wp.vec2(hit.u, hit.v)
+                out = wp.mesh_eval_face_normal(mesh, face)
+    contact_face[i] = face
+    if face >= 0:
+        e1, e2, n = face_frame(mesh, face)
+        contact_uv[i] = uv
         contact_local[i] = wp.vec3(wp.dot(out, e1), wp.dot(out, e2), wp.dot(out, n))
+    window_start[i] = x_start[i]
 
 
 @wp.kernel

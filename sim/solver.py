@@ -60,6 +60,10 @@ class ColoredConstraints:
                       device=self.device)
 
 
+#: A particle's path relative to the body longer than this (m) since the last search is traced for
+#: a crossing: half the thickness of the thinnest body part (a finger, about 2 cm), so a shorter path
+#: cannot have reached past a part's middle and the closest body point is the right way out.
+CCD_MIN_PATH = 0.01
 #: Self-contact keeps two layers this many material thicknesses apart (centre to centre).
 SELF_SEPARATION = 1.0
 #: Triangles with a corner closer than this many median rest edge lengths to a particle on the rest
@@ -116,6 +120,8 @@ class ClothSolver:
         self.contact_face = wp.full(self.count, -1, dtype=wp.int32, device=device)
         self.contact_uv = wp.zeros(self.count, dtype=wp.vec2, device=device)
         self.contact_local = wp.zeros_like(self.x)
+        self.window_start = wp.clone(self.x)  # positions at the start of the last search's substep
+        self.window_time = 0.0  # and when that substep started (s)
         self.body_push = wp.zeros(self.count, dtype=float, device=device)
         self.ground_push = wp.zeros(self.count, dtype=float, device=device)
         self.body_start = _vec3(body_vertices, device)
@@ -162,16 +168,21 @@ class ClothSolver:
     def update_contacts(self, substep: int, dt: float) -> None:
         """Place the body at the end of this substep; every ``contact_interval`` substeps search each
         particle's closest body point (reaching as far as the fastest body vertex of this frame,
-        at least ``max_body_speed``, travels until the next search); then put every contact plane
-        where its body face is now."""
+        at least ``max_body_speed``, travels until the next search; a particle that moved more than
+        CCD_MIN_PATH relative to the body since the last search takes the face its path entered the
+        body by, if any); then put every contact plane where its body face is now."""
         interval = self.settings.contact_interval
         search = substep % interval == 0
         self.place_body((substep + 1) / self.settings.substeps, refit=search)
         if search:
             reach = self.thickness + self.settings.contact_reach + interval * dt * self.body_speed
+            started = self.time + substep * dt
             wp.launch(kernels.find_contacts, dim=self.count,
-                      inputs=[self.body.id, self.x, reach, self.contact_face, self.contact_uv, self.contact_local],
+                      inputs=[self.body.id, self.x, self.x_start, reach, self.thickness,
+                              int(self.settings.continuous_collision), CCD_MIN_PATH, started + dt - self.window_time,
+                              self.window_start, self.contact_face, self.contact_uv, self.contact_local],
                       device=self.device)
+            self.window_time = started
             if self.settings.self_contact:
                 self.self_contact.search(self.x_start, self.self_contact.separation + self.settings.contact_reach)
         wp.launch(kernels.track_contacts, dim=self.count,

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from darts.dart.model import Dart
 from darts.geometry.warp_runtime import warp
 from sim.model import cloth_model
 from sim.self_contact import SelfContact
 from sim.settings import SimSettings
 from sim.solver import ClothSolver
+from tests.helpers import sheet_dart
 
 wp = warp()
 
@@ -37,13 +37,6 @@ def _folded_sheet() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return vertices, np.array(faces), upper
 
 
-def _sheet_dart(vertices: np.ndarray, faces: np.ndarray) -> Dart:
-    empty = np.zeros((0, 2), np.int32)
-    return Dart(category="test-sheet", vertices=vertices.astype(np.float32), faces=faces.astype(np.int32),
-                panel=np.zeros(len(faces), np.int32), panel_names=["sheet"], lines={}, seams=[], pairs=empty,
-                pair_seam=np.zeros(0, np.int32), pair_position=np.zeros(0, np.float32))
-
-
 #: A tetrahedron far above everything: only the ground holds the lower layer.
 FAR_BODY = (np.array([[0.0, 0.0, 50.0], [1.0, 0.0, 50.0], [0.0, 1.0, 50.0], [0.0, 0.0, 51.0]]),
             np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
@@ -51,7 +44,7 @@ FAR_BODY = (np.array([[0.0, 0.0, 50.0], [1.0, 0.0, 50.0], [0.0, 1.0, 50.0], [0.0
 
 def _drop(self_contact: bool, frames: int = 20):
     vertices, faces, upper = _folded_sheet()
-    model = cloth_model(_sheet_dart(vertices, faces))
+    model = cloth_model(sheet_dart(vertices, faces))
     body_vertices, body_faces = FAR_BODY
     settings = SimSettings(self_contact=self_contact)
     solver = ClothSolver(model, model.rest, body_faces, body_vertices, settings)
@@ -110,7 +103,7 @@ def _cross_strips(edge_edge: bool, frames: int = 20) -> tuple[float, float, floa
     upper and lower strips' particles over the crossing (mean), and the material thickness."""
     lower, lower_faces = _strip(False, 0.003)
     upper, upper_faces = _strip(True, 0.033)
-    model = cloth_model(_sheet_dart(np.vstack([lower, upper]), np.vstack([lower_faces, upper_faces + len(lower)])))
+    model = cloth_model(sheet_dart(np.vstack([lower, upper]), np.vstack([lower_faces, upper_faces + len(lower)])))
     body_vertices, body_faces = FAR_BODY
     solver = ClothSolver(model, model.rest, body_faces, body_vertices, SimSettings())
     solver.self_contact.edge_edge = edge_edge
