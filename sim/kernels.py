@@ -115,9 +115,10 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
         path = p - origin
         length = wp.length(path)
         if length > min_path and not inside_body(mesh, origin, reach):
-            hit = wp.mesh_query_ray(mesh, origin, path / length, length)
-            if hit.result and hit.sign > 0.0 and not inside_body(mesh, origin + hit.t * path / length
-                                                                 + thickness * hit.normal, reach):
+            direction = path / length
+            hit = wp.mesh_query_ray(mesh, origin, direction, length)
+            if hit.result and hit.sign > 0.0 and not inside_body(mesh, origin + hit.t * direction + thickness * hit.normal,
+                                                                 reach):
                 face = hit.face
                 uv = wp.vec2(hit.u, hit.v)
                 out = wp.mesh_eval_face_normal(mesh, face)
@@ -305,8 +306,7 @@ def frame_measures(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), v: wp.array(dtyp
     if query.result and query.sign < 0.0:
         wp.atomic_add(inside, 0, 1)
         probe = wp.mesh_eval_position(mesh, query.face, query.u, query.v) + 0.003 * wp.mesh_eval_face_normal(mesh, query.face)
-        again = wp.mesh_query_point_sign_normal(mesh, probe, 10.0)
-        if again.result and again.sign < 0.0:
+        if inside_body(mesh, probe, 10.0):
             wp.atomic_add(inside, 1, 1)
     wp.atomic_max(max_speed, 0, wp.length(vi))
 

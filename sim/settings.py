@@ -33,7 +33,7 @@ class SimSettings:
     max_speed: float = 50.0  # m/s; faster means the run has blown up
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep
     self_contact: bool = True  # the garment collides with itself
-    continuous_collision: bool = True  # a particle inside the body leaves by the face its path entered
+    continuous_collision: bool = True  # a particle whose path entered the body goes back out that face
     seed: int = 0
 
     def check(self) -> None:
