@@ -1,6 +1,6 @@
 """Self-contact of the garment: vertex-triangle repulsion with side memory, and a crossing count.
 
-Every search (with the body's, every ``contact_interval`` substeps) refits a BVH over the garment's
+Every search (every ``self_contact_interval`` substeps) refits a BVH over the garment's
 own triangles (the particle array itself, so never rebuilt) and gives each particle its closest
 triangle within reach that is not its neighbour on the rest garment, with the side it is on. Each
 sweep then keeps the particle ``separation`` away from that triangle's plane on that side, sharing

@@ -28,7 +28,8 @@ class SimSettings:
     damping: float = 0.1  # 1/s, velocity decay rate
     ground: bool = True  # the plane z = 0
     contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
-    contact_interval: int = 2  # substeps between closest-point searches
+    contact_interval: int = 1  # substeps between the body's closest-point searches
+    self_contact_interval: int = 2  # substeps between the garment's self-contact searches
     max_body_speed: float = 5.0  # m/s the search reach allows for at least (more when the body is faster)
     max_speed: float = 50.0  # m/s; faster means the run has blown up
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep
@@ -47,6 +48,7 @@ class SimSettings:
             (self.substeps >= 1, f"substeps must be >= 1, got {self.substeps}"),
             (self.iterations >= 1, f"iterations must be >= 1, got {self.iterations}"),
             (self.contact_interval >= 1, f"contact interval must be >= 1, got {self.contact_interval}"),
+            (self.self_contact_interval >= 1, f"self-contact interval must be >= 1, got {self.self_contact_interval}"),
             (self.cg_iterations >= 1, f"cg iterations must be >= 1, got {self.cg_iterations}"),
             (self.solver in SOLVERS, f"unknown solver '{self.solver}' (one of {', '.join(SOLVERS)})"),
             (0 <= self.gust <= 1, f"gust must be in [0, 1], got {self.gust}"),

@@ -170,7 +170,8 @@ class ClothSolver:
         particle's closest body point (reaching as far as the fastest body vertex of this frame,
         at least ``max_body_speed``, travels until the next search; a particle that moved more than
         CCD_MIN_PATH relative to the body since the last search takes the face its path entered the
-        body by, if any); then put every contact plane where its body face is now."""
+        body by, if any); every ``self_contact_interval`` substeps search the garment's self-contacts;
+        then put every contact plane where its body face is now."""
         interval = self.settings.contact_interval
         search = substep % interval == 0
         self.place_body((substep + 1) / self.settings.substeps, refit=search)
@@ -183,8 +184,8 @@ class ClothSolver:
                               self.window_start, self.contact_face, self.contact_uv, self.contact_local],
                       device=self.device)
             self.window_time = started
-            if self.settings.self_contact:
-                self.self_contact.search(self.x_start, self.self_contact.separation + self.settings.contact_reach)
+        if self.settings.self_contact and substep % self.settings.self_contact_interval == 0:
+            self.self_contact.search(self.x_start, self.self_contact.separation + self.settings.contact_reach)
         wp.launch(kernels.track_contacts, dim=self.count,
                   inputs=[self.body.id, self.contact_face, self.contact_uv, self.contact_local, self.contact_point,
                           self.contact_normal, self.contact_velocity], device=self.device)
