@@ -9,7 +9,7 @@ the kernels) with the reference settings: XPBD, 10 substeps x 4 iterations, self
 Warp launch and BVH refit is timed on the host (the CPU backend runs them synchronously), so the
 breakdown adds up to the frame time less Python overhead. Reported: particles, simulated frames per
 second, microseconds per particle per substep, and the share of each kernel; at 6k also the same
-run without the body contact's continuous test, for its cost.
+run without the body contact's continuous test, and without crease contacts, for their cost.
 """
 from __future__ import annotations
 
@@ -105,17 +105,19 @@ def main() -> None:
         top = ", ".join(f"{k} {100 * v:.0f} %" for k, v in list(row["share"].items())[:4])
         print(f"{size}: {row['particles']} particles, {row['sim_fps']:.2f} fps, "
               f"{row['us_per_particle_substep']:.3f} us/particle/substep ({top})", flush=True)
-    without_ccd = None
-    if "6k" in rows:  # what the body contact's continuous test costs, against the same run without it
-        without_ccd = measure(garment("6k", body), track, args.frames, replace(settings, continuous_collision=False))
-        print(f"6k without continuous collision: {without_ccd['sim_fps']:.2f} fps; with it "
-              f"{rows['6k']['sim_fps'] / without_ccd['sim_fps']:.3f} x the speed; body contact search "
-              f"{rows['6k']['ms_per_frame']['find_contacts']:.2f} against "
-              f"{without_ccd['ms_per_frame']['find_contacts']:.2f} ms a frame", flush=True)
+    # What the body contact's continuous test and crease contacts each cost: the 6k run without it.
+    ablations = {}
+    if "6k" in rows:
+        for name in ("continuous_collision", "crease_contacts"):
+            without = measure(garment("6k", body), track, args.frames, replace(settings, **{name: False}))
+            ablations[name] = without
+            print(f"6k without {name}: {without['sim_fps']:.2f} fps; with it {rows['6k']['sim_fps'] / without['sim_fps']:.3f} x "
+                  f"the speed; body contact search {rows['6k']['ms_per_frame']['find_contacts']:.2f} against "
+                  f"{without['ms_per_frame']['find_contacts']:.2f} ms a frame", flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"settings": {"solver": "xpbd", "substeps": 10, "iterations": 4, "self_contact": True,
                                                  "motion": "walk", "fps": 30}, "sizes": rows,
-                                    "6k_without_ccd": without_ccd}, indent=1))
+                                    "6k_without": ablations}, indent=1))
 
 
 if __name__ == "__main__":

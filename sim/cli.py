@@ -75,6 +75,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--no-ccd", action="store_true",
                    help="push particles inside the body out at the closest body point only, without tracing their "
                         "path back to the face they entered by")
+    p.add_argument("--no-crease", action="store_true",
+                   help="keep each particle off its closest body face only, not also off a second face within a "
+                        "thickness of where that push puts it (creases, where the body overlaps itself)")
     p.add_argument("--max-speed", type=float, default=defaults.max_speed,
                    help=f"m/s; a faster particle stops the run as unstable (default {defaults.max_speed:g})")
     p.add_argument("--seed", type=int, default=0, help="seed of the wind gusts (runs are deterministic)")
@@ -151,7 +154,7 @@ def _settings(args) -> SimSettings:
     settings = SimSettings(fps=args.fps, substeps=substeps, iterations=args.iterations, solver=args.solver,
                            device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed,
                            max_speed=args.max_speed, self_contact=not args.no_self_contact,
-                           continuous_collision=not args.no_ccd)
+                           continuous_collision=not args.no_ccd, crease_contacts=not args.no_crease)
     try:
         settings.check()
     except ValueError as exc:

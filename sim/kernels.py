@@ -10,6 +10,14 @@ from darts.geometry.warp_runtime import warp
 
 wp = warp()
 
+#: A second contact face whose outward direction is within about 8 degrees of the first one's adds
+#: no plane worth keeping off.
+SAME_PLANE = wp.constant(0.99)
+#: Two contact planes whose outward directions are more than about 154 degrees apart face each other
+#: across a gap too narrow to sit a thickness off both (the point that does lies > 4.4 thicknesses
+#: away along the crease): the first, nearer face alone keeps the particle off.
+FACING = wp.constant(-0.9)
+
 
 @wp.kernel
 def body_frame(start: wp.array(dtype=wp.vec3), end: wp.array(dtype=wp.vec3), weight: float, fps: float,
@@ -81,7 +89,8 @@ def inside_body(mesh: wp.uint64, p: wp.vec3, reach: float):
 def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3), reach: float,
                   thickness: float, continuous: int, min_path: float, elapsed: float, window_start: wp.array(dtype=wp.vec3),
                   contact_face: wp.array(dtype=wp.int32), contact_uv: wp.array(dtype=wp.vec2),
-                  contact_local: wp.array(dtype=wp.vec3)):
+                  contact_local: wp.array(dtype=wp.vec3), second: int, second_face: wp.array(dtype=wp.int32),
+                  second_uv: wp.array(dtype=wp.vec2), second_local: wp.array(dtype=wp.vec3)):
     """Closest body point within ``reach`` of each particle (face, barycentrics) and the outward
     direction there, stored in the face's own frame so that it turns with the face (face -1: none).
 
@@ -93,7 +102,14 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
     whose outside, ``thickness`` off the hit, is free (not inside another part where the body
     overlaps itself), that face is the contact, so a particle that got past a thin part's middle,
     or right through it, goes back out the side it came in. ``window_start`` then takes ``x_start``
-    (the start of this substep)."""
+    (the start of this substep).
+
+    With ``second`` set, a particle closer than ``thickness`` to its contact also looks where that
+    contact alone would put it (a thickness off its plane): a face closer than a thickness to that
+    point, turned more than SAME_PLANE away, is its second contact (``second_face``, -1: none),
+    stored the same way. That is a crease: two faces of one part meeting at a concave angle, or two
+    parts pressed together where the posed body overlaps itself (the belly and a thigh in a squat);
+    one plane alone pushes the particle off one face into the other's thickness or inside it."""
     i = wp.tid()
     p = x[i]
     query = wp.mesh_query_point_sign_normal(mesh, p, reach)
@@ -123,10 +139,30 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
                 uv = wp.vec2(hit.u, hit.v)
                 out = wp.mesh_eval_face_normal(mesh, face)
     contact_face[i] = face
+    other = int(-1)
     if face >= 0:
         e1, e2, n = face_frame(mesh, face)
         contact_uv[i] = uv
         contact_local[i] = wp.vec3(wp.dot(out, e1), wp.dot(out, e2), wp.dot(out, n))
+        # Where the first contact would put the particle, is another face closer than a thickness?
+        # Then the particle sits in a crease (or where the posed body overlaps itself) and must keep
+        # off that face's plane too. (A particle a thickness off its closest face has none.)
+        depth = thickness - wp.dot(p - wp.mesh_eval_position(mesh, face, uv[0], uv[1]), out)
+        if second != 0 and depth > 0.0:
+            target = p + depth * out
+            near = wp.mesh_query_point_sign_normal(mesh, target, thickness)
+            if near.result and near.face != face:
+                c2 = wp.mesh_eval_position(mesh, near.face, near.u, near.v)
+                out2 = wp.mesh_eval_face_normal(mesh, near.face)
+                gap2 = wp.length(target - c2)
+                if gap2 > 1.0e-6:
+                    out2 = near.sign * (target - c2) / gap2
+                if wp.dot(out2, out) < SAME_PLANE:
+                    other = near.face
+                    f1, f2, m = face_frame(mesh, other)
+                    second_uv[i] = wp.vec2(near.u, near.v)
+                    second_local[i] = wp.vec3(wp.dot(out2, f1), wp.dot(out2, f2), wp.dot(out2, m))
+    second_face[i] = other
     window_start[i] = x_start[i]
 
 
@@ -148,20 +184,47 @@ def track_contacts(mesh: wp.uint64, contact_face: wp.array(dtype=wp.int32), cont
     contact_velocity[i] = wp.mesh_eval_velocity(mesh, face, uv[0], uv[1])
 
 
+@wp.func
+def two_plane_push(d1: float, n1: wp.vec3, d2: float, n2: wp.vec3):
+    """Smallest move m with m.n1 >= d1 and m.n2 >= d2 (the particle ``d`` too close to each plane):
+    one plane's push if it also clears the other, else m = a n1 + b n2 on both planes,
+    [1 c; c 1][a; b] = [d1; d2] with c = n1.n2. Planes facing each other (c < FACING) leave
+    the nearer one, the first, in charge."""
+    m1 = wp.max(d1, 0.0) * n1
+    if wp.dot(m1, n2) >= d2:
+        return m1
+    m2 = wp.max(d2, 0.0) * n2
+    if wp.dot(m2, n1) >= d1:
+        return m2
+    c = wp.dot(n1, n2)
+    if c < FACING:
+        return m1
+    det = 1.0 - c * c
+    return ((d1 - c * d2) / det) * n1 + ((d2 - c * d1) / det) * n2
+
+
 @wp.kernel
 def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=wp.vec3),
                      contact_normal: wp.array(dtype=wp.vec3), contact_face: wp.array(dtype=wp.int32),
+                     second_point: wp.array(dtype=wp.vec3), second_normal: wp.array(dtype=wp.vec3),
+                     second_face: wp.array(dtype=wp.int32),
                      thickness: float, ground: int, ground_height: float, body_push: wp.array(dtype=float),
                      ground_push: wp.array(dtype=float)):
-    """Move particles to ``thickness`` outside the body's tangent plane at their contact (and above
-    the ground plane z = ground_height), adding up how far each was pushed."""
+    """Move particles to ``thickness`` outside the body's tangent plane at their contact, and that
+    of their second contact where they have one (the smallest move clearing both), and above the
+    ground plane z = ground_height, adding up how far each was pushed."""
     i = wp.tid()
     p = x[i]
     if contact_face[i] >= 0:
-        depth = thickness - wp.dot(p - contact_point[i], contact_normal[i])
-        if depth > 0.0:
-            p = p + depth * contact_normal[i]
-            body_push[i] = body_push[i] + depth
+        n1 = contact_normal[i]
+        d1 = thickness - wp.dot(p - contact_point[i], n1)
+        move = wp.max(d1, 0.0) * n1
+        if second_face[i] >= 0:
+            move = two_plane_push(d1, n1, thickness - wp.dot(p - second_point[i], second_normal[i]), second_normal[i])
+        push = wp.length(move)
+        if push > 0.0:
+            p = p + move
+            body_push[i] = body_push[i] + push
     if ground == 1:
         depth = ground_height + thickness - p[2]
         if depth > 0.0:
@@ -171,11 +234,17 @@ def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=w
 
 
 @wp.func
-def _coulomb(p: wp.vec3, start: wp.vec3, normal: wp.vec3, surface_velocity: wp.vec3, push: float,
+def _coulomb(p: wp.vec3, start: wp.vec3, normal: wp.vec3, crease: wp.vec3, surface_velocity: wp.vec3, push: float,
              friction: float, dt: float):
-    """Remove the tangential motion relative to the surface, up to friction * normal push."""
+    """Remove the tangential motion relative to the surface, up to friction * normal push. With a
+    second contact plane (``crease``, its normal; zero if none) only motion along the crease line
+    n x crease is tangential: the rest is what the two planes push."""
     slide = (p - start) - surface_velocity * dt
     tangential = slide - wp.dot(slide, normal) * normal
+    line = wp.cross(normal, crease)
+    if wp.length(line) > 1.0e-3:
+        line = wp.normalize(line)
+        tangential = wp.dot(slide, line) * line
     length = wp.length(tangential)
     if length <= friction * push:
         return p - tangential
@@ -185,14 +254,18 @@ def _coulomb(p: wp.vec3, start: wp.vec3, normal: wp.vec3, surface_velocity: wp.v
 @wp.kernel
 def apply_friction(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3),
                    contact_normal: wp.array(dtype=wp.vec3), contact_velocity: wp.array(dtype=wp.vec3),
+                   second_normal: wp.array(dtype=wp.vec3), second_face: wp.array(dtype=wp.int32),
                    friction: float, dt: float, body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
     """Coulomb friction once per substep, from the total normal push of the contact sweeps."""
     i = wp.tid()
     p = x[i]
     if body_push[i] > 0.0:
-        p = _coulomb(p, x_start[i], contact_normal[i], contact_velocity[i], body_push[i], friction, dt)
+        crease = wp.vec3(0.0)
+        if second_face[i] >= 0:
+            crease = second_normal[i]
+        p = _coulomb(p, x_start[i], contact_normal[i], crease, contact_velocity[i], body_push[i], friction, dt)
     if ground_push[i] > 0.0:
-        p = _coulomb(p, x_start[i], wp.vec3(0.0, 0.0, 1.0), wp.vec3(0.0), ground_push[i], friction, dt)
+        p = _coulomb(p, x_start[i], wp.vec3(0.0, 0.0, 1.0), wp.vec3(0.0), wp.vec3(0.0), ground_push[i], friction, dt)
     x[i] = p
     body_push[i] = 0.0
     ground_push[i] = 0.0

@@ -35,6 +35,7 @@ class SimSettings:
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep
     self_contact: bool = True  # the garment collides with itself
     continuous_collision: bool = True  # a particle whose path entered the body goes back out that face
+    crease_contacts: bool = True  # a particle kept off a second body face within a thickness of its push
     seed: int = 0
 
     def check(self) -> None:

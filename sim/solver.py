@@ -60,6 +60,19 @@ class ColoredConstraints:
                       device=self.device)
 
 
+class BodyContacts:
+    """One body contact per particle (face -1: none): where it was found (face, barycentrics, the
+    outward direction in the face's frame) and its plane now (point, normal, surface velocity)."""
+
+    def __init__(self, count: int, device: str):
+        self.face = wp.full(count, -1, dtype=wp.int32, device=device)
+        self.uv = wp.zeros(count, dtype=wp.vec2, device=device)
+        self.local = wp.zeros(count, dtype=wp.vec3, device=device)
+        self.point = wp.zeros(count, dtype=wp.vec3, device=device)
+        self.normal = wp.zeros(count, dtype=wp.vec3, device=device)
+        self.velocity = wp.zeros(count, dtype=wp.vec3, device=device)
+
+
 #: A particle's path relative to the body longer than this (m) since the last search is traced for
 #: a crossing: half the thickness of the thinnest body part (a finger, about 2 cm), so a shorter path
 #: cannot have reached past a part's middle and the closest body point is the right way out.
@@ -114,12 +127,10 @@ class ClothSolver:
         self.mass = _floats(model.mass, device)
         self.inverse_mass = _floats(1.0 / model.mass, device)
         self.faces = wp.array(np.ascontiguousarray(model.faces, np.int32), dtype=wp.int32, device=device)
-        self.contact_point = wp.zeros_like(self.x)
-        self.contact_normal = wp.zeros_like(self.x)
-        self.contact_velocity = wp.zeros_like(self.x)
-        self.contact_face = wp.full(self.count, -1, dtype=wp.int32, device=device)
-        self.contact_uv = wp.zeros(self.count, dtype=wp.vec2, device=device)
-        self.contact_local = wp.zeros_like(self.x)
+        self.contact = BodyContacts(self.count, device)
+        # A second body face kept off where the first contact would put the particle within a
+        # thickness of another (a crease, or where the posed body overlaps itself).
+        self.second = BodyContacts(self.count, device)
         self.window_start = wp.clone(self.x)  # positions at the start of the last search's substep
         self.window_time = 0.0  # and when that substep started (s)
         self.body_push = wp.zeros(self.count, dtype=float, device=device)
@@ -170,8 +181,9 @@ class ClothSolver:
         particle's closest body point (reaching as far as the fastest body vertex of this frame,
         at least ``max_body_speed``, travels until the next search; a particle that moved more than
         CCD_MIN_PATH relative to the body since the last search takes the face its path entered the
-        body by, if any); every ``self_contact_interval`` substeps search the garment's self-contacts;
-        then put every contact plane where its body face is now."""
+        body by, if any, and one within a thickness of where its push would put it takes that face
+        as a second contact); every ``self_contact_interval`` substeps search the garment's
+        self-contacts; then put every contact plane where its body face is now."""
         interval = self.settings.contact_interval
         search = substep % interval == 0
         self.place_body((substep + 1) / self.settings.substeps, refit=search)
@@ -181,14 +193,15 @@ class ClothSolver:
             wp.launch(kernels.find_contacts, dim=self.count,
                       inputs=[self.body.id, self.x, self.x_start, reach, self.thickness,
                               int(self.settings.continuous_collision), CCD_MIN_PATH, started + dt - self.window_time,
-                              self.window_start, self.contact_face, self.contact_uv, self.contact_local],
+                              self.window_start, self.contact.face, self.contact.uv, self.contact.local,
+                              int(self.settings.crease_contacts), self.second.face, self.second.uv, self.second.local],
                       device=self.device)
             self.window_time = started
         if self.settings.self_contact and substep % self.settings.self_contact_interval == 0:
             self.self_contact.search(self.x_start, self.self_contact.separation + self.settings.contact_reach)
-        wp.launch(kernels.track_contacts, dim=self.count,
-                  inputs=[self.body.id, self.contact_face, self.contact_uv, self.contact_local, self.contact_point,
-                          self.contact_normal, self.contact_velocity], device=self.device)
+        for c in (self.contact, self.second):
+            wp.launch(kernels.track_contacts, dim=self.count,
+                      inputs=[self.body.id, c.face, c.uv, c.local, c.point, c.normal, c.velocity], device=self.device)
 
     def resolve_contacts(self) -> None:
         """Keep particles off the garment's own triangles (layers the body has pushed this substep
@@ -197,13 +210,15 @@ class ClothSolver:
         if self.settings.self_contact:
             self.self_contact.resolve(self.inverse_mass, self.body_push)
         wp.launch(kernels.resolve_contacts, dim=self.count,
-                  inputs=[self.x, self.contact_point, self.contact_normal, self.contact_face, self.thickness,
+                  inputs=[self.x, self.contact.point, self.contact.normal, self.contact.face, self.second.point,
+                          self.second.normal, self.second.face, self.thickness,
                           int(self.settings.ground), 0.0, self.body_push, self.ground_push], device=self.device)
 
     def apply_friction(self, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""
         wp.launch(kernels.apply_friction, dim=self.count,
-                  inputs=[self.x, self.x_start, self.contact_normal, self.contact_velocity, self.friction, dt,
+                  inputs=[self.x, self.x_start, self.contact.normal, self.contact.velocity, self.second.normal,
+                          self.second.face, self.friction, dt,
                           self.body_push, self.ground_push], device=self.device)
 
     # -- the public interface ---------------------------------------------------------------------
@@ -251,8 +266,8 @@ class ClothSolver:
             gap = np.linalg.norm(x[a] - x[b]) - model.spring_rest[s]
             found.append((gap / max(self.thickness, 1e-6), f"seam '{model.seam_names[model.spring_seam[s]]}' spring "
                                                            f"{a}-{b} off its rest length by {1e3 * gap:.1f} mm"))
-        if self.contact_face.numpy()[particle] >= 0:
-            point, normal = self.contact_point.numpy()[particle], self.contact_normal.numpy()[particle]
+        if self.contact.face.numpy()[particle] >= 0:
+            point, normal = self.contact.point.numpy()[particle], self.contact.normal.numpy()[particle]
             depth = self.thickness - float(np.dot(x[particle] - point, normal))
             found.append((depth / self.thickness, f"body contact {1e3 * depth:.1f} mm deep"))
         if self.settings.self_contact and self.self_contact.face.numpy()[particle] >= 0:

@@ -1,5 +1,6 @@
 """Body contact: a cloth moving fast enough to pass a thin body part between two contact searches
-stays on the side it came from (continuous collision), and tunnels through without it."""
+stays on the side it came from (continuous collision), and tunnels through without it; a cloth
+pressed into a narrow crease keeps a thickness off both of its faces (crease contacts)."""
 from __future__ import annotations
 
 import numpy as np
@@ -58,3 +59,47 @@ def test_without_continuous_collision_it_tunnels(height):
     """The closest-point contact alone lets every particle through (the test above can fail)."""
     z, _ = _throw_at_plate(height, continuous=False)
     assert np.all(z < -PLATE)
+
+
+#: The walls of the crease rise this steeply (rad): a 30-degree groove, its faces' outward normals
+#: 150 degrees apart, as between the thigh and the belly in a deep squat.
+WALL = np.radians(75.0)
+
+
+def _groove() -> tuple[trimesh.Trimesh, np.ndarray]:
+    """Two 4 cm slabs whose top faces meet along the Y axis in a V (and overlap 1 cm past it, as the
+    posed body overlaps itself in a crease); the mesh and the two faces' outward unit normals (their
+    planes pass through the origin)."""
+    slabs = []
+    for sign in (1, -1):
+        slab = trimesh.creation.box(extents=(0.2, 0.2, 0.04))
+        slab.apply_translation((-sign * 0.09, 0.0, -0.02))
+        slab.apply_transform(trimesh.transformations.rotation_matrix(sign * WALL, (0, 1, 0)))
+        slabs.append(slab)
+    normals = np.array([[np.sin(WALL), 0.0, np.cos(WALL)], [-np.sin(WALL), 0.0, np.cos(WALL)]])
+    return trimesh.util.concatenate(slabs), normals
+
+
+def _press_into_groove(crease: bool) -> np.ndarray:
+    """One substep of a small patch placed 4 mm up the groove, within a thickness of both faces;
+    each particle's distance to each face's plane afterwards, in material thicknesses [P,2]."""
+    body, normals = _groove()
+    patch = np.array([[0.0003, -0.001, 0.004], [0.0003, 0.001, 0.004], [0.0008, 0.0, 0.0045]])
+    model = cloth_model(sheet_dart(patch, np.array([[0, 1, 2]])))
+    settings = SimSettings(substeps=1, iterations=1, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
+                           self_contact=False, crease_contacts=crease)
+    solver = ClothSolver(model, model.rest, np.asarray(body.faces), np.asarray(body.vertices), settings)
+    assert np.all(model.rest @ normals.T < 0.99 * solver.thickness)  # the patch starts too close to both
+    solver.step_frame(np.asarray(body.vertices))
+    return solver.positions() @ normals.T / solver.thickness
+
+
+def test_a_patch_in_a_crease_ends_a_thickness_off_both_faces():
+    assert np.all(np.abs(_press_into_groove(crease=True) - 1.0) < 0.01)
+
+
+def test_without_crease_contacts_it_stays_too_close_to_one_face():
+    """One plane per particle pushes it off the nearer face into the other's thickness (the test
+    above can fail)."""
+    distances = _press_into_groove(crease=False)
+    assert np.all(distances.min(axis=1) < 0.5)
