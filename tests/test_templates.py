@@ -81,11 +81,35 @@ def test_shipped_dart_round_trips_exactly(name, tmp_path):
         assert original[key].dtype == again[key].dtype and np.array_equal(original[key], again[key]), key
 
 
-def test_template_is_deterministic_and_sized(body):
+def _loop_length(vertices: np.ndarray, loop) -> float:
+    points = vertices[np.asarray(loop)]
+    return float(np.linalg.norm(np.roll(points, -1, 0) - points, axis=1).sum())
+
+
+def test_rebuilt_template_matches_the_shipped_geometry(body):
+    """The shipped file was made on another CPU: a rebuild here may differ by float rounding, and the
+    remesh by a few vertices (seen: 12,285 against 12,271), so it is compared as geometry: vertex
+    count within 0.5 %, surface distance both ways (mean under 0.3 mm, max under 3 mm; edges are
+    11 mm) and every feature line's length within 1 %."""
     dart = make_dart("short-sleeve-top", body)
     shipped = load_dart(GARMENTS / "short-sleeve-top.npz")
     assert 5000 <= len(dart.vertices) <= 8000
-    assert np.array_equal(dart.vertices, shipped.vertices) and np.array_equal(dart.faces, shipped.faces)
+    assert abs(len(dart.vertices) / len(shipped.vertices) - 1) <= 0.005
+    assert abs(len(dart.faces) / len(shipped.faces) - 1) <= 0.005
+    for source, target in ((dart, shipped), (shipped, dart)):
+        distance = np.abs(SurfaceDistance(target.vertices, target.faces).query(source.vertices, winding=False)[0])
+        assert distance.mean() < 3e-4 and distance.max() < 3e-3, (distance.mean(), distance.max())
+    assert sorted(dart.lines) == sorted(shipped.lines) and dart.panel_names == shipped.panel_names
+    for name in dart.lines:
+        ours, theirs = _loop_length(dart.vertices, dart.lines[name]), _loop_length(shipped.vertices, shipped.lines[name])
+        assert abs(ours / theirs - 1) < 0.01, name
+
+
+def test_template_build_is_deterministic_on_one_machine(body):
+    first = make_dart("short-skirt", body, edge_length=0.02)
+    again = make_dart("short-skirt", body, edge_length=0.02)
+    for key, value in dart_arrays(first).items():
+        assert np.array_equal(value, dart_arrays(again)[key]), key
 
 
 def test_edge_length_controls_resolution(body):
