@@ -48,13 +48,33 @@ class BodyTrack:
         return (np.asarray(canonical, np.float64) - self.rest_origin) @ self.rest_rotation.T + self.rest_translation
 
 
+def _shape_blend(start: np.ndarray, target: np.ndarray, count: int, frames: int) -> np.ndarray:
+    """Betas [frames, K]: from ``start`` to ``target`` over the first ``count`` frames along a
+    smoothstep s(w) = 3w^2 - 2w^3 (no jump in the body's speed at either end), then ``target``."""
+    width = max(len(start), len(target))
+    start, target = np.pad(start, (0, width - len(start))), np.pad(target, (0, width - len(target)))
+    w = np.clip(np.arange(frames) / max(count, 1), 0.0, 1.0)
+    s = (3 * w**2 - 2 * w**3)[:, None]
+    return (1 - s) * start + s * target
+
+
 def build_body_track(body: BodyModel, motion: Motion, fps: float, settle: float, betas=None,
-                     progress: bool = False) -> BodyTrack:
-    """Pose ``body`` by ``motion`` resampled to ``fps``, preceded by ``settle`` seconds of blend."""
+                     progress: bool = False, start_betas=None) -> BodyTrack:
+    """Pose ``body`` by ``motion`` resampled to ``fps``, preceded by ``settle`` seconds of blend.
+
+    ``start_betas``: the shape the body starts in (a garment's own shape) when it is not ``betas``
+    (the shape to simulate on); the body then also changes shape during the settle blend, so a
+    garment made for one body is carried onto another."""
     if settle < 0:
         raise ValueError(f"settle must be >= 0 s, got {settle}")
     motion = resample(motion, fps) if abs(motion.fps - fps) > 1e-9 else motion
     count = int(round(settle * fps))
+    target = motion_betas(body, motion, betas)
+    start = target if start_betas is None else np.asarray(start_betas, np.float64)
+    reshaping = len(target) + len(start) > 0 and not np.array_equal(np.pad(start, (0, max(0, len(target) - len(start)))),
+                                                                    np.pad(target, (0, max(0, len(start) - len(target)))))
+    if reshaping and count == 0:
+        raise ValueError("a body shape other than the garment's needs a settle period to change shape in")
     if count:
         weights = (np.arange(count) / count)[:, None, None]
         blend = {name: arr[:1] * weights for name, arr in motion.parts().items()}
@@ -62,9 +82,9 @@ def build_body_track(body: BodyModel, motion: Motion, fps: float, settle: float,
         blended = motion.with_frames(trans=np.repeat(motion.trans[:1], count, 0), **blend)
         joined = {name: np.concatenate([getattr(blended, name), arr]) for name, arr in motion.parts().items()}
         motion = motion.with_frames(trans=np.concatenate([blended.trans, motion.trans]), **joined)
-    vertices, _ = pose_sequence(body, motion, betas=betas, progress=progress)
-    shape = torch.as_tensor(motion_betas(body, motion, betas), dtype=body.dtype)
-    _, rest_joints = body.shaped(shape)
+    shapes = _shape_blend(start, target, count, motion.num_frames) if reshaping else target
+    vertices, _ = pose_sequence(body, motion, betas=shapes, progress=progress)
+    _, rest_joints = body.shaped(torch.as_tensor(start, dtype=body.dtype))
     origin = rest_joints[0, 0].double().numpy()
     # In the rest pose every joint moves with the root: x -> R (x - J_0) + J_0 + trans.
     rotation = axis_angle_to_matrix(torch.as_tensor(motion.body_pose[0, 0], dtype=torch.float64)).numpy()

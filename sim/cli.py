@@ -8,12 +8,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from darts.body.io import load_body
-from darts.cli.errors import run_guarded
+from darts.cli.errors import OneLineParser, run_guarded
 from darts.dart.export import panel_colors
 from darts.dart.io import load_dart
 from darts.dart.model import MATERIALS, parse_seam_setting
@@ -43,7 +44,7 @@ def _vector(text: str) -> tuple[float, float, float]:
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = OneLineParser(
         prog="darts-sim",
         description="Simulate a DART garment on a body posed by an AMASS motion (Warp cloth solver). "
                     "Output frames are in the AMASS world frame: Z up, metres.")
@@ -65,6 +66,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--iterations", type=int, default=defaults.iterations, help="XPBD sweeps per substep (default 2)")
     p.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
     p.add_argument("--body", metavar="PATH", help="SMPL/SMPL-H/SMPL-X model file (default: the bundled body)")
+    p.add_argument("--betas", type=float, nargs="+", metavar="B",
+                   help="body shape to simulate on (default: the shape the DART was made for); the body changes "
+                        "from the DART's shape into this one during --settle")
     p.add_argument("--material", choices=sorted(MATERIALS), help="replace the garment's material")
     p.add_argument("--seam", action="append", default=[], metavar="NAME=REGIME[:STIFFNESS]",
                    help="seam regime (welded, stiff, loose, repulsive, partial); NAME 'all' sets every seam")
@@ -149,7 +153,7 @@ class _PreviewFrames:
         render_preview(animation, args.preview, progress=not args.quiet)
 
 
-def _settings(args) -> SimSettings:
+def settings_from_args(args) -> SimSettings:
     substeps = args.substeps if args.substeps is not None else DEFAULT_SUBSTEPS[args.solver]
     settings = SimSettings(fps=args.fps, substeps=substeps, iterations=args.iterations, solver=args.solver,
                            device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed,
@@ -164,9 +168,34 @@ def _settings(args) -> SimSettings:
     return settings
 
 
-def _main(argv: list[str] | None) -> int:
-    args = parser().parse_args(argv)
-    settings = _settings(args)
+@dataclass
+class SimOutcome:
+    """What one ``darts-sim`` run ended with: its exit code (0 done, 3 unstable), the ``--stats``
+    document and, when unstable, the message saying where it stopped."""
+
+    code: int
+    stats: dict
+    message: str
+    wrote: bool
+
+
+def _shape(args, dart, body) -> tuple[np.ndarray, np.ndarray]:
+    """(the DART's own betas, the betas to simulate on), checked against the body."""
+    own = np.asarray(dart.body_betas, np.float64)
+    if len(own) > body.num_betas:
+        raise DartsInputError(args.garment, f"was made for {len(own)} shape coefficients, the body has {body.num_betas}")
+    if args.betas is None:
+        return own, own
+    target = np.asarray(args.betas, np.float64)
+    if len(target) > body.num_betas or not np.isfinite(target).all():
+        raise DartsInputError(None, f"--betas must be at most {body.num_betas} finite numbers, got {len(target)}")
+    return own, target
+
+
+def execute(args) -> SimOutcome:
+    """Run ``darts-sim`` for parsed ``args``: check every input and output, simulate, write the
+    output, the stats and the preview. Bad input raises DartsInputError before anything is written."""
+    settings = settings_from_args(args)
     if args.preview and Path(args.preview).suffix.lower() not in PREVIEW_SUFFIXES:
         raise DartsInputError(args.preview, f"preview must end in {', '.join(PREVIEW_SUFFIXES)}")
     dart = load_dart(resolve_garment(args.garment))
@@ -182,7 +211,12 @@ def _main(argv: list[str] | None) -> int:
     body = load_body(args.body)
     if args.device != "cpu":
         _check_device(args.device)
-    track = build_body_track(body, motion, args.fps, args.settle, progress=not args.quiet)
+    own, target = _shape(args, dart, body)
+    try:
+        track = build_body_track(body, motion, args.fps, args.settle, betas=target, start_betas=own,
+                                 progress=not args.quiet)
+    except ValueError as exc:
+        raise DartsInputError(None, f"{exc} (--betas differs from the DART's shape: give --settle > 0)") from None
 
     preview = _PreviewFrames(args, track)
     try:
@@ -203,12 +237,17 @@ def _main(argv: list[str] | None) -> int:
     if args.stats:
         with atomic_path(args.stats) as tmp:
             Path(tmp).write_text(json.dumps(stats, indent=1))
+    return SimOutcome(0 if result.stable else UNSTABLE_EXIT, stats, result.message, bool(result.frames))
+
+
+def _main(argv: list[str] | None) -> int:
+    args = parser().parse_args(argv)
+    outcome = execute(args)
     if not args.quiet:
-        _print_summary(stats, args.output if result.frames else None)
-    if not result.stable:
-        print(f"darts-sim: {result.message}", file=sys.stderr)
-        return UNSTABLE_EXIT
-    return 0
+        _print_summary(outcome.stats, args.output if outcome.wrote else None)
+    if outcome.code == UNSTABLE_EXIT:
+        print(f"darts-sim: {outcome.message}", file=sys.stderr)
+    return outcome.code
 
 
 def _check_device(device: str) -> None:

@@ -1,6 +1,7 @@
 """Turning bad input into one clear line on stderr and exit code 2."""
 from __future__ import annotations
 
+import argparse
 import sys
 from typing import Callable
 
@@ -18,3 +19,11 @@ def run_guarded(prog: str, main: Callable[[list[str] | None], int], argv: list[s
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are DartsInputErrors: one line ``prog: error: problem`` and
+    exit code 2 from ``run_guarded``, not the usage block (``--help`` still shows it)."""
+
+    def error(self, message: str):
+        raise DartsInputError(None, f"{message} (see {self.prog} --help)")

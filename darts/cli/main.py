@@ -24,7 +24,7 @@ import torch
 
 from darts import __version__
 from darts.body.io import export_smpl_npz, load_body
-from darts.cli.errors import run_guarded
+from darts.cli.errors import OneLineParser, run_guarded
 from darts.cli.deform import add_parser as add_deform_parser
 from darts.cli.garment import add_parsers as add_garment_parsers
 from darts.errors import DartsInputError
@@ -136,11 +136,23 @@ def render(args) -> int:
     return 0
 
 
+#: Entry-point group of commands that other packages add to ``darts`` (``darts batch`` and
+#: ``darts dataset`` come from ``sim``: they run the solver, which ``darts`` itself never imports).
+PLUGIN_GROUP = "darts.commands"
+
+
+def _add_plugin_parsers(groups) -> None:
+    from importlib.metadata import entry_points
+
+    for entry in sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name):
+        entry.load()(groups)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="darts", description="DARTs: bodies, motions and garment templates.",
+    parser = OneLineParser(prog="darts", description="DARTs: bodies, motions and garment templates.",
                                      epilog=f"shipped motions: {', '.join(shipped_motions())}")
     parser.add_argument("--version", action="version", version=f"darts {__version__}")
-    groups = parser.add_subparsers(dest="group", required=True, metavar="{body,motion,template,inspect,export,deform,render}")
+    groups = parser.add_subparsers(dest="group", required=True)
 
     body = groups.add_parser("body", help="the SMPL-format body model").add_subparsers(dest="command", required=True)
     info = body.add_parser("info", help="vertex/face/joint counts, joint names, height")
@@ -166,6 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     minfo.set_defaults(run=motion_info)
     add_garment_parsers(groups, _add_body_args)
     add_deform_parser(groups)
+    _add_plugin_parsers(groups)
     preview = groups.add_parser("render", help="render a darts-sim USD result (body and garment, fixed camera)")
     preview.add_argument("usd", metavar="OUT.usd", help="a USD file written by darts-sim")
     preview.add_argument("-o", "--output", required=True, metavar="PREVIEW",

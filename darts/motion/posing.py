@@ -23,16 +23,18 @@ def pose_sequence(model: BodyModel, motion: Motion, betas=None, ground: bool = F
                   chunk: int = 64, progress: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Vertices [T,V,3] and joints [T,J,3] (float32, metres, Z-up world): LBS(pose, betas) + trans.
 
-    With ``ground`` the whole sequence is shifted along Z so its lowest vertex touches z = 0."""
+    ``betas`` is one shape [K] or one per frame [T,K] (a body changing shape). With ``ground`` the
+    whole sequence is shifted along Z so its lowest vertex touches z = 0."""
     pose = motion.model_pose(model.num_joints)
     shape = torch.as_tensor(motion_betas(model, motion, betas), dtype=model.dtype)
+    per_frame = shape.ndim == 2
     vertices = np.empty((motion.num_frames, model.num_vertices, 3), np.float32)
     joints = np.empty((motion.num_frames, model.num_joints, 3), np.float32)
     with torch.no_grad():
         for start in tqdm(range(0, motion.num_frames, chunk), desc="posing", unit="chunk",
                           disable=None if progress else True, leave=False):
             stop = min(start + chunk, motion.num_frames)
-            out = model(pose[start:stop], betas=shape, trans=motion.trans[start:stop])
+            out = model(pose[start:stop], betas=shape[start:stop] if per_frame else shape, trans=motion.trans[start:stop])
             vertices[start:stop] = out.vertices.numpy()
             joints[start:stop] = out.joints.numpy()
     if ground:

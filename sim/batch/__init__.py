@@ -1,0 +1,1 @@
+"""``darts batch``: many ``darts-sim`` runs from one SPEC, on Ray (``darts.jobs``)."""

@@ -1,0 +1,123 @@
+"""`darts batch`: SPEC to jobs, a local Ray run, resuming after SIGKILL, a broken job, bad input."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from darts.dart.build import make_dart
+from darts.dart.io import save_dart
+from darts.jobs import MANIFEST, read_manifest
+from sim.batch.spec import load_jobs
+
+EXAMPLE = Path(__file__).parents[1] / "scenes" / "batch" / "example.toml"
+
+
+@pytest.fixture(scope="module")
+def coarse_garments(body, tmp_path_factory):
+    """The example's two garments at 3 cm edges (about 700 vertices): the same jobs, a few seconds each."""
+    folder = tmp_path_factory.mktemp("garments")
+    for name in ("short-skirt", "sleeveless-top"):
+        save_dart(make_dart(name, body, edge_length=0.03), folder / f"{name}.npz")
+    return folder
+
+
+def _spec(folder: Path, garments, frames: int, extra: str = "") -> Path:
+    path = folder / "spec.toml"
+    path.write_text(EXAMPLE.read_text().replace("frames = 6", f"frames = {frames}")
+                    .replace('garments = ["short-skirt", "sleeveless-top"]', f"garments = {json.dumps(garments)}") + extra)
+    return path
+
+
+def _published(out: Path) -> list[Path]:
+    return [d for d in out.glob("*") if d.is_dir() and not d.name.startswith(".")]
+
+
+def _darts_batch(*args, **kwargs) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "darts.cli.main", "batch", *map(str, args)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
+
+
+def test_example_spec_is_the_cross_product():
+    jobs = load_jobs(EXAMPLE)
+    assert len(jobs) == 8 and len({job.id for job in jobs}) == 8
+    combos = {(j.inputs["garment"], j.inputs["motion"], j.inputs["body"]) for j in jobs}
+    assert combos == {(g, m, b) for g in ("short-skirt", "sleeveless-top") for m in ("walk", "squat") for b in ("mean", "broad")}
+    broad = next(j for j in jobs if j.inputs["body"] == "broad")
+    assert broad.inputs["betas"] == [1.5, 0.8] and "--betas 1.5 0.8" in broad.inputs["command"]
+    assert all("--frames 6 --settle 0.3" in j.inputs["command"] for j in jobs)
+
+
+def test_killed_batch_resumes_without_redoing_finished_jobs(coarse_garments, tmp_path):
+    spec = _spec(tmp_path, [str(coarse_garments / "short-skirt.npz"), str(coarse_garments / "sleeveless-top.npz")], 12)
+    out = tmp_path / "out"
+    first = _darts_batch(spec, "-o", out, "--workers", "2")
+    deadline = time.time() + 240
+    while time.time() < deadline and not any((d / "result.json").is_file() for d in _published(out)):
+        time.sleep(0.2)
+    in_flight = list(out.glob(".*.tmp-*"))
+    first.send_signal(signal.SIGKILL)
+    first.wait()
+    finished = {d.name: (d / "result.json").stat().st_mtime_ns for d in _published(out)}
+    assert 1 <= len(finished) < 8 and in_flight, "the kill must come mid-way, with jobs in flight"
+    for folder in _published(out):  # every published folder is complete
+        assert {"result.json", "stats.json", "sim.usdc"} <= {p.name for p in folder.iterdir()}, folder
+    again = _darts_batch(spec, "-o", out, "--workers", "2")
+    _, err = again.communicate(timeout=600)
+    assert again.returncode == 0, err
+    rows = read_manifest(out / MANIFEST)
+    assert len(rows) == 8 and all(row["status"] == "ok" for row in rows.values())
+    assert all((out / name / "result.json").stat().st_mtime_ns == mtime for name, mtime in finished.items())
+    assert not list(out.glob(".*.tmp-*"))
+    lines = (out / MANIFEST).read_text().splitlines()
+    assert len(lines) == 8  # rewritten: one row per job
+    row = json.loads(lines[0])
+    assert {"garment", "motion", "body", "betas", "status", "wall_seconds", "sim_fps", "max_penetration",
+            "max_seam_gap", "stable", "error", "command"} <= set(row)
+    assert row["stable"] and row["max_penetration"] <= 0.01 and row["sim_fps"] > 0
+
+
+def test_a_broken_garment_fails_its_jobs_only(coarse_garments, tmp_path, run_darts):
+    broken = tmp_path / "broken.npz"
+    broken.write_bytes(b"PK\x03\x04 this is not a garment")
+    spec = _spec(tmp_path, [str(coarse_garments / "short-skirt.npz"), str(broken)], 1)
+    spec.write_text(spec.read_text().replace('motions = ["walk", "squat"]', 'motions = ["walk"]'))
+    out = tmp_path / "out"
+    code, stdout, _ = run_darts("batch", spec, "-o", out)
+    assert code == 1
+    rows = list(read_manifest(out / MANIFEST).values())
+    failed = [r for r in rows if r["status"] == "failed"]
+    assert len(rows) == 4 and len(failed) == 2 and all(r["garment"] == str(broken) for r in failed)
+    assert all("broken.npz" in r["error"] and "npz" in r["error"] for r in failed)
+    assert all(r["status"] == "ok" for r in rows if r not in failed)
+    assert not any((out / r["id"]).exists() for r in failed)
+    assert "2 of 4 jobs succeeded" in stdout
+
+
+@pytest.mark.parametrize("case, problem", [
+    ("unreadable", "is not valid TOML"),
+    ("missing", "no such file"),
+    ("unknown key", "unknown key(s) frame"),
+    ("bad setting", "substeps must be >= 1"),
+    ("unknown material", "invalid choice: 'wool'"),
+    ("address", "cannot reach a Ray cluster at 127.0.0.1:9"),
+])
+def test_bad_batch_input_is_one_line_exit_2_and_no_output(case, problem, tmp_path, run_darts):
+    spec = tmp_path / "spec.toml"
+    text = EXAMPLE.read_text()
+    spec.write_text({"unreadable": "[sim\nframes = ", "missing": text, "unknown key": text.replace("frames = 6", "frame = 6"),
+                     "bad setting": text + "\n[[jobs]]\ngarment = 'short-skirt'\nmotion = 'walk'\nsim = { substeps = 0 }\n",
+                     "unknown material": text.replace("[sweep]", "[sweep]\nmaterials = ['wool']"),
+                     "address": text}[case])
+    if case == "missing":
+        spec.unlink()
+    args = ["batch", spec, "-o", tmp_path / "out"] + (["--address", "127.0.0.1:9"] if case == "address" else [])
+    code, out, err = run_darts(*args)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and problem in err, err
+    assert err.startswith("darts: error: ") and not (tmp_path / "out").exists()
