@@ -32,6 +32,24 @@ def atomic_path(path: str | os.PathLike, keep_suffix: bool = False):
             os.unlink(tmp)
 
 
+def check_output(path: str | os.PathLike, suffixes: tuple[str, ...] | None = None) -> Path:
+    """``path`` as a Path, or a DartsInputError if a file cannot be written there: a suffix not in
+    ``suffixes``, an existing directory, a parent that is a file or cannot be created or written.
+    Called for every output before a long run starts."""
+    path = Path(path)
+    if suffixes is not None and path.suffix.lower() not in suffixes:
+        raise DartsInputError(path, f"must end in {', '.join(suffixes)}")
+    if path.is_dir():
+        raise DartsInputError(path, "is a directory")
+    parent = path.parent
+    existing = next((p for p in [parent, *parent.parents] if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        raise DartsInputError(path, f"cannot be written: {existing} is a file")
+    if existing is not None and not os.access(existing, os.W_OK | os.X_OK):
+        raise DartsInputError(path, f"cannot be written: no permission in {existing}")
+    return path
+
+
 def save_npz(path: str | os.PathLike, compressed: bool = True, **arrays) -> None:
     """Write arrays to ``path`` exactly (no ``.npz`` appended), atomically."""
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:

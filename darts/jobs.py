@@ -19,6 +19,7 @@ default threading on two cores ran a CRDL solve 16 times slower.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -44,11 +45,17 @@ FINISHED = ("ok", "unstable")  # statuses a re-run keeps; "failed" jobs are trie
 
 @dataclass(frozen=True)
 class Job:
-    """One unit of work: ``id`` names its folder (letters, digits, ``._-``); ``inputs`` (JSON) go
-    into its manifest row and tell ``function`` what to do."""
+    """One unit of work: ``id`` (letters, digits, ``._-``) is unique; ``inputs`` (JSON) go into its
+    manifest row and tell ``function`` what to do; ``folder`` is where under OUT_DIR its output is
+    published (default: ``id``)."""
 
     id: str
     inputs: dict = field(hash=False)
+    folder: str | None = None
+
+    @property
+    def path(self) -> str:
+        return self.folder or self.id
 
 
 #: ``function(job, folder)`` does the job, writing its files into ``folder`` (which exists), and
@@ -72,8 +79,8 @@ def run_one(function: JobFunction, job: Job, out_dir: Path) -> dict:
     """Do ``job`` in a temporary folder and publish it as ``out_dir/<id>/``; the manifest row. Any
     exception is the job's failure, recorded with its message (a DartsInputError's one line)."""
     out_dir = Path(out_dir)
-    final = out_dir / job.id
-    work = out_dir / f".{job.id}.tmp-{uuid.uuid4().hex[:8]}"
+    final = out_dir / job.path
+    work = final.parent / f".{job.id}.tmp-{uuid.uuid4().hex[:8]}"
     work.mkdir(parents=True)
     started = time.perf_counter()
     row = {"id": job.id, **job.inputs}
@@ -102,16 +109,16 @@ def _remote_one(function: JobFunction, job: Job, out_dir: str) -> dict:
     return run_one(function, job, Path(out_dir))
 
 
-def finished_rows(out_dir: Path) -> dict[str, dict]:
-    """Rows of the finished jobs, read from their folders."""
+def finished_rows(out_dir: Path, jobs: list[Job]) -> dict[str, dict]:
+    """Rows of the finished ``jobs``, read from their folders."""
     rows = {}
-    for result in Path(out_dir).glob(f"*/{RESULT}"):
+    for job in jobs:
         try:
-            row = json.loads(result.read_text())
+            row = json.loads((Path(out_dir) / job.path / RESULT).read_text())
         except (OSError, json.JSONDecodeError):
             continue
         if row.get("status") in FINISHED:
-            rows[result.parent.name] = row
+            rows[job.id] = row
     return rows
 
 
@@ -170,26 +177,32 @@ def check_address(address: str, timeout: float = 5.0) -> None:
         raise DartsInputError(None, f"cannot reach a Ray cluster at {address} ({exc.strerror or exc})") from None
 
 
-def _start_ray(address: str | None, workers: int | None):
+@contextlib.contextmanager
+def ray_session(address: str | None = None, workers: int | None = None):
+    """Ray, started here (``ray.init()`` with ``workers`` CPUs, default one per core) or joined at
+    ``address``, for one or more ``run_jobs``; shut down at the end."""
     import logging
 
     import ray
 
-    env = {"env_vars": dict(SINGLE_THREAD_ENV)}
-    options = dict(include_dashboard=False, logging_level=logging.ERROR, log_to_driver=False, runtime_env=env)
+    options = dict(include_dashboard=False, logging_level=logging.ERROR, log_to_driver=False,
+                   runtime_env={"env_vars": dict(SINGLE_THREAD_ENV)})
     if address is None:
         ray.init(num_cpus=workers or os.cpu_count() or 1, **options)
     else:
         check_address(address)
         ray.init(address=address, **options)
-    return ray
+    try:
+        yield ray
+    finally:
+        ray.shutdown()
 
 
 def run_jobs(jobs: Iterable[Job], out_dir: str | os.PathLike, function: JobFunction, *, workers: int | None = None,
-             address: str | None = None, retry: int = 0, progress: bool = True,
-             on_row: Callable[[dict], None] | None = None) -> list[dict]:
-    """Run every unfinished job of ``jobs`` on Ray (``ray.init()`` here with ``workers`` CPUs, one
-    job per CPU, or the cluster at ``address``); the manifest rows of all jobs, in job order."""
+             address: str | None = None, retry: int = 0, progress: bool = True, session=None,
+             description: str = "jobs") -> list[dict]:
+    """Run every unfinished job of ``jobs`` on Ray (``session``, else a ``ray_session(address,
+    workers)`` of its own); the manifest rows of all jobs, in job order."""
     from tqdm import tqdm
 
     jobs = list(jobs)
@@ -197,18 +210,19 @@ def run_jobs(jobs: Iterable[Job], out_dir: str | os.PathLike, function: JobFunct
         raise ValueError("job ids must be unique")
     out_dir = Path(out_dir)
     check_out_dir(out_dir)
-    for stale in out_dir.glob(".*.tmp-*"):
-        shutil.rmtree(stale, ignore_errors=True)
+    for parent in {(out_dir / job.path).parent for job in jobs}:
+        for stale in parent.glob(".*.tmp-*"):
+            shutil.rmtree(stale, ignore_errors=True)
     manifest = out_dir / MANIFEST
     known = {job.id for job in jobs}
     rows = {key: row for key, row in read_manifest(manifest).items() if key in known and row.get("status") not in FINISHED}
-    rows.update({key: row for key, row in finished_rows(out_dir).items() if key in known})
+    rows.update(finished_rows(out_dir, jobs))
     _write_manifest(manifest, jobs, rows)
     pending = [job for job in jobs if rows.get(job.id, {}).get("status") not in FINISHED]
-    bar = tqdm(total=len(jobs), initial=len(jobs) - len(pending), unit="job", desc="jobs", disable=not progress)
+    bar = tqdm(total=len(jobs), initial=len(jobs) - len(pending), unit="job", desc=description, disable=not progress)
     if pending:
-        ray = _start_ray(address, workers)
-        try:
+        with contextlib.ExitStack() as stack:
+            ray = session or stack.enter_context(ray_session(address, workers))
             remote = ray.remote(num_cpus=1, max_retries=retry)(_remote_one)
             limit = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
             queue, running = list(reversed(pending)), {}
@@ -222,16 +236,13 @@ def run_jobs(jobs: Iterable[Job], out_dir: str | os.PathLike, function: JobFunct
                     try:
                         row = ray.get(done[0])
                     except Exception as exc:  # noqa: BLE001 - the worker died (after its retries)
+                        first = str(exc).splitlines()[0] if str(exc) else ""
                         row = {"id": job.id, **job.inputs, "status": "failed", "wall_seconds": 0.0,
-                               "error": f"worker lost: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"}
+                               "error": f"worker lost: {type(exc).__name__}: {first}"}
                     rows[job.id] = row
                     _append(handle, row)
-                    if on_row is not None:
-                        on_row(row)
                     bar.update(1)
-                    bar.set_postfix_str(f"{sum(r['status'] == 'failed' for r in rows.values())} failed")
-        finally:
-            ray.shutdown()
+                    bar.set_postfix_str(f"{sum(r['status'] == 'failed' for r in rows.values())} failed", refresh=False)
     bar.close()
     _write_manifest(manifest, jobs, rows)
     return [rows[job.id] for job in jobs]

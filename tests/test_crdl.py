@@ -12,7 +12,8 @@ import trimesh
 from darts.crdl.arap import _rotations_from_covariances, arap_energy, arap_system, best_rotations
 from darts.crdl.deform import deform_dart, fit_surface, handle_targets, weld_garment
 from darts.crdl.layer import Crdl, CrdlWeights
-from darts.crdl.silhouette import Camera, Silhouette
+from darts.camera import Camera
+from darts.crdl.silhouette import Silhouette
 from darts.crdl.targets import correspond, edit_targets, loop_frame
 from darts.dart.build import make_dart
 from darts.dart.io import load_dart, save_dart

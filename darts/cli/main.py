@@ -26,6 +26,7 @@ from darts import __version__
 from darts.body.io import export_smpl_npz, load_body
 from darts.cli.errors import OneLineParser, run_guarded
 from darts.cli.deform import add_parser as add_deform_parser
+from darts.cli.reconstruct import add_parsers as add_reconstruct_parsers
 from darts.cli.garment import add_parsers as add_garment_parsers
 from darts.errors import DartsInputError
 from darts.fileio import save_npz
@@ -178,6 +179,7 @@ def build_parser() -> argparse.ArgumentParser:
     minfo.set_defaults(run=motion_info)
     add_garment_parsers(groups, _add_body_args)
     add_deform_parser(groups)
+    add_reconstruct_parsers(groups)
     _add_plugin_parsers(groups)
     preview = groups.add_parser("render", help="render a darts-sim USD result (body and garment, fixed camera)")
     preview.add_argument("usd", metavar="OUT.usd", help="a USD file written by darts-sim")

@@ -1,74 +1,19 @@
 """The silhouette term of the CRDL: the garment's soft silhouette seen by a pinhole camera against a
 garment mask (a SoftRas-style differentiable rasteriser, Liu et al. 2019, written in torch).
 
-Camera (``camera.json``): ``width``, ``height`` (pixels), ``fx``, ``fy``, ``cx``, ``cy`` (pixels),
-``rotation`` [3,3] and ``translation`` [3] taking canonical-frame points (Y up, metres) to camera
-coordinates x_c = R x + t (OpenCV: x right, y down, looking along +z). Pixel (u, v) of a point is
-(fx x_c / z_c + cx, fy y_c / z_c + cy); row v of the mask image is image row v.
+The camera is ``darts.camera.Camera`` (``camera.json``); row v of the mask image is image row v.
 """
 from __future__ import annotations
 
-import json
 import os
-from dataclasses import dataclass
 
 import numpy as np
 import torch
 
+from darts.camera import Camera
 from darts.errors import DartsInputError
 
 SIGMA = 1.0  # pixels: the width of a triangle's soft edge
-
-
-@dataclass
-class Camera:
-    width: int
-    height: int
-    fx: float
-    fy: float
-    cx: float
-    cy: float
-    rotation: np.ndarray
-    translation: np.ndarray
-
-    @classmethod
-    def from_json(cls, path: str | os.PathLike) -> "Camera":
-        """Read and check ``camera.json`` (see the module docstring)."""
-        try:
-            data = json.loads(open(path).read())
-        except FileNotFoundError:
-            raise DartsInputError(path, "no such file") from None
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise DartsInputError(path, f"not a JSON camera ({exc})") from None
-        keys = ("width", "height", "fx", "fy", "cx", "cy", "rotation", "translation")
-        missing = [key for key in keys if not isinstance(data, dict) or key not in data]
-        if missing:
-            raise DartsInputError(path, f"missing key(s) {', '.join(missing)}")
-        try:
-            rotation = np.asarray(data["rotation"], np.float64)
-            translation = np.asarray(data["translation"], np.float64)
-            numbers = [float(data[key]) for key in keys[:6]]
-        except (TypeError, ValueError):
-            raise DartsInputError(path, "camera values must be numbers") from None
-        if rotation.shape != (3, 3) or translation.shape != (3,):
-            raise DartsInputError(path, f"rotation must be [3,3] and translation [3], got {rotation.shape} and {translation.shape}")
-        if not (np.isfinite(rotation).all() and np.isfinite(translation).all() and np.isfinite(numbers).all()):
-            raise DartsInputError(path, "camera values must be finite")
-        if not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-4) or np.linalg.det(rotation) < 0:
-            raise DartsInputError(path, "rotation is not a rotation matrix")
-        width, height, fx, fy, cx, cy = numbers
-        if width < 1 or height < 1 or width != int(width) or height != int(height) or fx <= 0 or fy <= 0:
-            raise DartsInputError(path, "width and height must be positive integers and fx, fy > 0")
-        return cls(int(width), int(height), fx, fy, cx, cy, rotation, translation)
-
-    def project(self, points: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """(pixel coordinates [N,2], depth [N]) of canonical-frame points [N,3]."""
-        camera = points @ torch.as_tensor(self.rotation, dtype=points.dtype).T + torch.as_tensor(self.translation, dtype=points.dtype)
-        depth = camera[:, 2]
-        safe = torch.where(depth > 1e-6, depth, torch.ones_like(depth))
-        u = self.fx * camera[:, 0] / safe + self.cx
-        v = self.fy * camera[:, 1] / safe + self.cy
-        return torch.stack([u, v], 1), depth
 
 
 def read_mask(path: str | os.PathLike, camera: Camera) -> np.ndarray:

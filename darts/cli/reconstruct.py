@@ -1,0 +1,110 @@
+"""``darts reconstruct IMAGE -o garment.npz`` and ``darts classify IMAGE``: one picture to a DART
+(docs/reconstruction.md)."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+from darts.errors import DartsInputError
+from darts.fileio import atomic_path, check_output
+
+SIM_SUFFIXES = (".usd", ".usda", ".usdc")
+
+
+def _image(path: str):
+    from darts.regress.data import read_image
+
+    return read_image(path)
+
+
+def classify(args) -> int:
+    from darts.regress.pipeline import classify_image
+
+    ranked = classify_image(_image(args.image))[: args.top]
+    if args.json:
+        print(json.dumps([{"category": c, "probability": p} for c, p in ranked], indent=1))
+    else:
+        for category, probability in ranked:
+            print(f"{category:20s} {100 * probability:6.2f} %")
+    return 0
+
+
+def reconstruct(args) -> int:
+    from darts.body.io import load_body
+    from darts.camera import Camera
+    from darts.dart.io import save_dart
+    from darts.regress.data import read_image
+    from darts.regress.pipeline import reconstruct as run
+    from darts.templates.categories import CATEGORIES
+
+    if args.category is not None and args.category not in CATEGORIES:
+        raise DartsInputError(None, f"unknown category '{args.category}' (one of {', '.join(CATEGORIES)})")
+    if (args.simulate is None) != (args.sim_out is None):
+        raise DartsInputError(None, "--simulate MOTION and --sim-out OUT.usdc go together")
+    check_output(args.output, (".npz",))
+    if args.report:
+        check_output(args.report)
+    if args.sim_out:
+        check_output(args.sim_out, SIM_SUFFIXES)
+    image = _image(args.image)
+    camera = Camera.from_json(args.camera) if args.camera else None
+    if camera is not None and (camera.width, camera.height) != (image.shape[1], image.shape[0]):
+        raise DartsInputError(args.camera, f"is {camera.width}x{camera.height} pixels but the image is "
+                                           f"{image.shape[1]}x{image.shape[0]}")
+    mask = None
+    if args.mask:
+        grey = read_image(args.mask, "L")
+        if grey.shape != image.shape[:2]:
+            raise DartsInputError(args.mask, f"the mask is {grey.shape[1]}x{grey.shape[0]} pixels but the image is "
+                                             f"{image.shape[1]}x{image.shape[0]}")
+        mask = grey > 127
+        if not mask.any():
+            raise DartsInputError(args.mask, "the mask is empty (no pixel above half grey)")
+    body = load_body(args.body)
+    if args.betas is not None and len(args.betas) > body.num_betas:
+        raise DartsInputError(None, f"--betas has {len(args.betas)} values, the body has {body.num_betas}")
+    result = run(image, body, args.category, camera, mask, betas=args.betas)
+    if mask is None:
+        result.report["note"] = ("no --mask: the CRDL fitted the regressed lines only, without its silhouette term; "
+                                 "give the garment's mask (white = garment, the image's size) from any segmenter to use it")
+    save_dart(result.dart, args.output)
+    if args.report:
+        with atomic_path(args.report) as tmp:
+            tmp.write_text(json.dumps(result.report, indent=1))
+    report = result.report
+    print(f"{report['category']} ({100 * report['probability']:.1f} %): wrote {args.output}, {report['vertices']} vertices, "
+          f"lines fitted to {1e3 * report['crdl']['handle_rmse']:.2f} mm, {100 * report['crdl']['penetration']:.2f} % inside "
+          f"the body, {report['times']['total_s']:.1f} s" + ("" if mask is not None else " (no mask: no silhouette term)"))
+    if args.simulate:
+        command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
+        if args.body:
+            command += ["--body", args.body]
+        return subprocess.run(command).returncode
+    return 0
+
+
+def add_parsers(groups) -> None:
+    """Register ``darts reconstruct`` and ``darts classify``."""
+    parser = groups.add_parser(
+        "reconstruct", help="one picture of a garment to a DART (classifier, feature-line regressor, CRDL)",
+        description="Classify the garment in IMAGE (unless --category), regress its feature lines, deform the "
+                    "category's template onto them with the CRDL (with the silhouette term when --mask is given) "
+                    "and write a DART. Without --camera the dataset's default camera of the category is assumed.")
+    parser.add_argument("image", metavar="IMAGE", help="RGB picture (PNG/JPEG), 224 x 224 or resized to it")
+    parser.add_argument("-o", "--output", required=True, metavar="garment.npz")
+    parser.add_argument("--mask", metavar="MASK", help="garment mask, the image's size (white = garment)")
+    parser.add_argument("--camera", metavar="camera.json", help="the picture's camera (docs/crdl.md)")
+    parser.add_argument("--category", help="skip the classifier")
+    parser.add_argument("--body", metavar="PATH", help="SMPL-format body (default: the bundled body)")
+    parser.add_argument("--betas", type=float, nargs="+", metavar="B", help="body shape (default: the rest shape)")
+    parser.add_argument("--report", metavar="report.json",
+                        help="category, probability, regressed lines, the CRDL's numbers and times per stage")
+    parser.add_argument("--simulate", metavar="MOTION", help="then simulate the DART: run darts-sim with this motion")
+    parser.add_argument("--sim-out", metavar="OUT.usdc", help="darts-sim's output with --simulate")
+    parser.set_defaults(run=reconstruct)
+    classifier = groups.add_parser("classify", help="the garment categories of a picture, most likely first")
+    classifier.add_argument("image", metavar="IMAGE")
+    classifier.add_argument("--top", type=int, default=3, help="how many categories to print (default 3)")
+    classifier.add_argument("--json", action="store_true", help="print JSON")
+    classifier.set_defaults(run=classify)

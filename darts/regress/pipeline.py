@@ -1,0 +1,133 @@
+"""From one picture to a DART: classify, regress the feature lines, fit the template with the CRDL.
+
+    picture (+ mask, camera) -> category (classifier, or given)
+                             -> feature lines (regressor, from the category's F_g and the camera)
+                             -> the category's template on the body, deformed by the CRDL so its
+                                lines reach the regressed ones, outside the body, and (with a mask)
+                                its silhouette matches the mask
+                             -> a DART (panels, seams, springs of the template)
+
+Pictures of another size than the networks' (224 x 224) are resized for the networks; the camera's
+intrinsics are scaled with them. Without a camera, the category's default camera
+(``Camera.default``: the dataset's, level and from the front) is assumed, at the picture's size.
+Everything is in the body's canonical frame (Y up, metres).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from darts.camera import IMAGE_SIZE, Camera
+from darts.errors import DartsInputError
+from darts.regress.data import CATEGORY_IDS, camera_batch, initial_lines, padded
+from darts.templates.categories import CATEGORIES
+
+WEIGHTS = Path(__file__).parent / "weights"
+
+
+@lru_cache(maxsize=None)
+def shipped_model(kind: str, name: str):
+    """A shipped network (``weights/<name>.pt``) and its record; loaded once per process."""
+    from darts.regress.train import load_checkpoint
+
+    path = WEIGHTS / f"{name}.pt"
+    if not path.is_file():
+        raise DartsInputError(path, "the shipped weights are missing (train them: docs/reconstruction.md)")
+    return load_checkpoint(path, kind)
+
+
+def network_input(image: np.ndarray) -> torch.Tensor:
+    """uint8 [H,W,3] -> float [1,3,224,224] in [0,1] (bilinear resize when the size differs)."""
+    x = torch.from_numpy(np.ascontiguousarray(image)).permute(2, 0, 1)[None].float() / 255
+    if x.shape[-2:] != (IMAGE_SIZE, IMAGE_SIZE):
+        x = torch.nn.functional.interpolate(x, size=(IMAGE_SIZE, IMAGE_SIZE), mode="bilinear", align_corners=False)
+    return x
+
+
+def scaled(camera: Camera, width: int, height: int) -> Camera:
+    """``camera`` for the same view at ``width`` x ``height`` pixels."""
+    sx, sy = width / camera.width, height / camera.height
+    return replace(camera, width=width, height=height, fx=camera.fx * sx, fy=camera.fy * sy, cx=camera.cx * sx, cy=camera.cy * sy)
+
+
+@torch.no_grad()
+def classify_image(image: np.ndarray) -> list[tuple[str, float]]:
+    """Every category with its probability, most likely first."""
+    model, _ = shipped_model("classifier", "classifier")
+    probabilities = torch.softmax(model(network_input(image)), 1)[0].numpy()
+    order = np.argsort(-probabilities)
+    return [(CATEGORY_IDS[i], float(probabilities[i])) for i in order]
+
+
+@torch.no_grad()
+def regress_lines(image: np.ndarray, camera: Camera, category: str, variant: str = "ours") -> dict[str, np.ndarray]:
+    """The feature lines of ``category`` seen in ``image`` through ``camera``: {name: [K,3]}."""
+    model, _ = shipped_model("lines", f"lines_{variant}")
+    lines, mask, creases = padded(category, initial_lines(category))
+    small = scaled(camera, IMAGE_SIZE, IMAGE_SIZE)
+    out = model(network_input(image), camera_batch([small]), torch.from_numpy(lines)[None],
+                torch.from_numpy(creases)[None])[-1][0].numpy().astype(np.float64)
+    return {name: out[k] for k, name in enumerate(CATEGORIES[category].line_names)}
+
+
+@dataclass
+class Reconstruction:
+    dart: object
+    report: dict
+
+
+def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
+                mask: np.ndarray | None = None, betas=None, edge_length: float | None = None) -> Reconstruction:
+    """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
+    switches the CRDL's silhouette term on."""
+    from darts.crdl.deform import deform_dart
+    from darts.crdl.layer import CrdlWeights
+    from darts.crdl.silhouette import Silhouette
+
+    times, started = {}, time.perf_counter()
+    if category is None:
+        ranked = classify_image(image)
+        category, probability = ranked[0]
+        times["classify_s"] = time.perf_counter() - started
+    else:
+        ranked, probability = [(category, 1.0)], 1.0
+    height, width = image.shape[:2]
+    camera = camera or Camera.default(category, width)
+    if (camera.width, camera.height) != (width, height):
+        raise DartsInputError(None, f"the camera is {camera.width}x{camera.height} pixels but the image is {width}x{height}")
+    mark = time.perf_counter()
+    lines = regress_lines(image, camera, category)
+    times["regress_s"] = time.perf_counter() - mark
+    mark = time.perf_counter()
+    template = _template(category, body, betas, edge_length)
+    times["template_s"] = time.perf_counter() - mark
+    silhouette = None if mask is None else Silhouette(mask, camera)
+    weights = CrdlWeights(silhouette=1.0 if silhouette is not None else 0.0)
+    mark = time.perf_counter()
+    dart, crdl = deform_dart(template, body, lines, "local-global", weights, silhouette)
+    times["crdl_s"] = time.perf_counter() - mark
+    times["total_s"] = time.perf_counter() - started
+    report = {"category": category, "probability": probability,
+              "top_categories": [{"category": c, "probability": p} for c, p in ranked[:3]],
+              "camera": camera.as_dict(), "silhouette": silhouette is not None,
+              "lines": {name: points.round(5).tolist() for name, points in lines.items()},
+              "crdl": {k: v for k, v in crdl.items() if k != "objective_history"},
+              "vertices": len(dart.vertices), "times": {k: round(v, 3) for k, v in times.items()}}
+    return Reconstruction(dart, report)
+
+
+def _template(category: str, body, betas, edge_length):
+    """The category's DART on ``body``: the shipped one for the default body's rest shape, else built."""
+    from darts.dart.build import make_dart
+    from darts.dart.io import load_dart
+    from scenes import resolve_garment
+
+    if edge_length is None and not betas and body.name.startswith("darts-default"):
+        return load_dart(resolve_garment(category))
+    options = {} if edge_length is None else {"edge_length": edge_length}
+    return make_dart(category, body, betas=None if not betas else np.asarray(betas), **options)

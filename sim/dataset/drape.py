@@ -1,0 +1,57 @@
+"""A short drape of a DART on the body standing still in its rest pose, in the canonical frame.
+
+The simulator runs in whatever frame its body track and gravity are given in; here both are the
+body's canonical frame (Y up, metres): the body is the rest-posed shape at every frame and gravity
+is (0, -9.81, 0) m/s^2, with no ground. So the draped garment, the lines and the cameras of a
+dataset sample all share the DART's own frame.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from darts.body.model import BodyModel
+from darts.dart.model import Dart
+from sim.body_track import BodyTrack
+from sim.run import simulate
+from sim.settings import DEFAULT_SUBSTEPS, SimSettings
+
+#: The solver that holds each family today (docs/simulation.md, "Known limits"): XPBD lets
+#: waistbands creep down the hips, the implicit mass-spring solver holds them.
+DRAPE_SOLVER = {"top": "xpbd", "dress": "xpbd", "pants": "mass-spring", "skirt": "mass-spring"}
+
+
+@dataclass
+class Drape:
+    """The draped DART vertices [V,3] (canonical frame) and what the run measured."""
+
+    vertices: np.ndarray
+    stable: bool
+    message: str
+    max_penetration: float
+    seconds: float
+
+
+def rest_track(body: BodyModel, betas, frames: int, fps: float) -> BodyTrack:
+    """The body in its rest pose, shaped by ``betas``, standing still for ``frames`` frames."""
+    rest = body.shaped(None if betas is None or len(betas) == 0 else np.asarray(betas))[0][0].double().numpy()
+    vertices = np.repeat(rest[None].astype(np.float32), frames + 1, axis=0)
+    return BodyTrack(vertices, body.faces, float(fps), 0, np.eye(3), np.zeros(3), np.zeros(3))
+
+
+def drape(dart: Dart, body: BodyModel, family: str, seconds: float = 0.5, fps: float = 30.0) -> Drape:
+    """Let ``dart`` (made for ``body`` in the DART's shape) settle under gravity for ``seconds``."""
+    solver = DRAPE_SOLVER[family]
+    frames = max(1, int(round(seconds * fps)))
+    settings = SimSettings(fps=fps, solver=solver, substeps=DEFAULT_SUBSTEPS[solver], gravity=(0.0, -9.81, 0.0),
+                           ground=False)
+    last = {}
+
+    def keep(garment: np.ndarray, _body: np.ndarray) -> None:
+        last["vertices"] = garment
+
+    result = simulate(dart, rest_track(body, dart.body_betas, frames, fps), settings, keep)
+    vertices = last.get("vertices", np.asarray(dart.vertices, np.float64))
+    return Drape(np.asarray(vertices, np.float64), result.stable, result.message,
+                 max((f["penetration"] for f in result.frames), default=0.0), result.wall_seconds)

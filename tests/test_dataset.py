@@ -1,0 +1,122 @@
+"""`darts dataset make`: a sample's lines land on its mask, samples repeat for a seed, bad input."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from darts.camera import Camera
+from darts.dart.io import load_dart
+from darts.fileio import read_npz
+from darts.jobs import run_one
+from darts.templates.categories import CATEGORIES
+from sim.dataset.cli import garment_jobs, sample_jobs
+from sim.dataset.make import hidden_by, line_mask_distances, make_garment, render_sample
+from darts.geometry.loops import LINE_POINTS
+from sim.dataset.recipe import EDIT_RANGES, garment_recipe
+
+SAMPLE_FILES = {"image.png", "mask.png", "body_mask.png", "camera.json", "lines.npz", "lines_px.npz", "garment.npz",
+                "draped.npz", "meta.json", "result.json"}
+TIMES = {"render_s", "times", "wall_seconds", "drape"}  # what may differ between two runs: wall times
+
+
+def _first_index(category: str) -> int:
+    return next(i for i in range(100) if garment_recipe(0, i).category == category)
+
+
+def _make(out: Path, index: int) -> list[dict]:
+    """Garment ``index`` of seed 0 and its samples, made in this process as the dataset's jobs are."""
+    job = garment_jobs(index + 1, 1, 0, list(CATEGORIES))[index]
+    row = run_one(make_garment, job, out / "garments")
+    assert row["status"] == "ok", row
+    return [run_one(render_sample, sample, out) for sample in sample_jobs([row], 1)]
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    out = tmp_path_factory.mktemp("dataset")
+    return out, {name: _make(out, _first_index(name)) for name in ("short-pants", "sleeveless-top")}
+
+
+def test_recipes_are_balanced_and_edit_every_line_the_category_has():
+    recipes = [garment_recipe(0, i) for i in range(200)]
+    counts = {c: sum(r.category == c for r in recipes) for c in CATEGORIES}
+    assert set(counts.values()) == {20}
+    assert 0.05 < np.mean([r.split == "test" for r in recipes]) < 0.15
+    assert set(EDIT_RANGES) == set(CATEGORIES)
+    for recipe in recipes[:10]:
+        assert {name for name, _ in recipe.edits} == set(EDIT_RANGES[recipe.category])
+        assert all(abs(b) <= 2.0 for b in recipe.betas) and len(recipe.betas) == 8
+    assert garment_recipe(0, 7) == garment_recipe(0, 7) and garment_recipe(0, 7) != garment_recipe(1, 7)
+
+
+def test_sample_lines_land_on_the_garment_mask_boundary(made, body):
+    out, rows = made
+    for name, samples in rows.items():
+        for row in samples:
+            assert row["status"] == "ok", row
+            folder = out / row["id"].split("-", 1)[0] / row["id"].split("-", 1)[1]
+            assert SAMPLE_FILES <= {p.name for p in folder.iterdir()}
+            camera = Camera.from_json(folder / "camera.json")
+            mask = np.asarray(Image.open(folder / "mask.png")) > 127
+            body_mask = np.asarray(Image.open(folder / "body_mask.png")) > 127
+            assert mask.shape == (camera.height, camera.width) and np.asarray(Image.open(folder / "image.png")).shape[2] == 3
+            lines = read_npz(folder / "lines.npz")
+            assert sorted(lines) == sorted(CATEGORIES[name].line_names)
+            assert all(points.shape == (LINE_POINTS, 3) for points in lines.values())
+            points = np.concatenate(list(lines.values())).astype(np.float64)
+            pixels, _ = camera.project(points)
+            assert np.allclose(pixels, np.concatenate(list(read_npz(folder / "lines_px.npz").values())), atol=1e-3)
+            to_boundary, to_mask = line_mask_distances(pixels, mask)
+            meta = json.loads(folder.joinpath("meta.json").read_text())
+            draped = read_npz(folder / "draped.npz")
+            shaped = body.shaped(np.asarray(meta["betas"]))[0][0].double().numpy()
+            behind_body = hidden_by(points, camera.centre, (shaped, body.faces), (draped["vertices"], draped["faces"])) == 0
+            # On the mask's edge; where a loop runs behind the garment it falls inside the mask, and
+            # where it runs behind the body (the back of a neckline, an armhole) the body is seen there.
+            assert np.median(to_boundary) <= 2.0, (folder, np.median(to_boundary))
+            assert to_mask[~behind_body].max() <= 4.0, (folder, to_mask[~behind_body].max())
+            col, row_ = np.floor(pixels[behind_body]).astype(int).T
+            assert body_mask[row_, col].mean() >= 0.9
+            assert row["line_boundary_median_px"] == pytest.approx(float(np.median(to_boundary)))
+
+
+def test_a_sample_is_made_again_the_same_from_its_seed(made, tmp_path):
+    out, rows = made
+    again = _make(tmp_path, _first_index("short-pants"))
+    for row in again:
+        split, name = row["id"].split("-", 1)
+        first, second = out / split / name, tmp_path / split / name
+        for path in sorted(first.iterdir()):
+            other = second / path.name
+            if path.suffix == ".png":
+                assert np.array_equal(np.asarray(Image.open(path)), np.asarray(Image.open(other))), path.name
+            elif path.suffix == ".npz":
+                a, b = read_npz(path), read_npz(other)
+                assert sorted(a) == sorted(b) and all(np.array_equal(a[k], b[k]) for k in a), path.name
+            else:
+                a, b = json.loads(path.read_text()), json.loads(other.read_text())
+                assert {k: v for k, v in a.items() if k not in TIMES} == {k: v for k, v in b.items() if k not in TIMES}
+    assert load_dart(first / "garment.npz").category == "short-pants"
+
+
+@pytest.mark.parametrize("args, problem", [
+    (["--count", "4", "--categories", "poncho"], "unknown category poncho"),
+    (["--count", "-3"], "--count must be >= 1"),
+    (["--count", "4", "--address", "127.0.0.1:9"], "cannot reach a Ray cluster at 127.0.0.1:9"),
+    (["--count", "4", "--views", "0"], "--views must be >= 1"),
+])
+def test_bad_dataset_input_is_one_line_exit_2_and_no_output(args, problem, tmp_path, run_darts):
+    code, out, err = run_darts("dataset", "make", tmp_path / "out", *args)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and problem in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_dataset_into_a_file_is_refused(tmp_path, run_darts):
+    target = tmp_path / "taken"
+    target.write_text("")
+    code, _, err = run_darts("dataset", "make", target, "--count", "2")
+    assert code == 2 and "exists and is not a directory" in err and target.read_text() == ""
