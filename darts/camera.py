@@ -19,16 +19,17 @@ from darts.errors import DartsInputError
 KEYS = ("width", "height", "fx", "fy", "cx", "cy", "rotation", "translation")
 IMAGE_SIZE = 224  # pixels, square: the dataset's pictures and the networks' input
 DISTANCE = 2.6  # metres from the framed region's centre
-MARGIN = 1.3  # the framed extent fills 1 / MARGIN of the image's width
-#: category -> (centre [3], extent m): the box each category's garments occupy on the default body
-#: (the shipped DART's box, lowered by the dataset's longest hem and widened by its widest flare or
-#: sleeve, sim/dataset/recipe.py). The camera of a picture looks at the centre, framing the extent.
+MARGIN = 1.15  # the framed extent fills 1 / MARGIN of the image's width
+#: category -> (centre [3], extent m): the box each category's garments occupy on the body, the
+#: full range over the 996 draped garments of the dataset of seed 0 (every body shape, edit and
+#: drape; docs/dataset.md): the largest of its width and height. A picture's camera looks at the
+#: centre and frames the extent.
 FRAMES = {
-    "long-sleeve-top": ((0.0, 0.0, 0.02), 1.36), "short-sleeve-top": ((0.0, 0.0, 0.02), 0.78),
-    "sleeveless-top": ((0.0, 0.0, 0.02), 0.70), "long-sleeve-dress": ((0.0, -0.21, 0.02), 1.36),
-    "short-sleeve-dress": ((0.0, -0.21, 0.02), 1.12), "sleeveless-dress": ((0.0, -0.21, 0.02), 1.12),
-    "long-pants": ((0.0, -0.63, 0.01), 0.95), "short-pants": ((0.0, -0.37, 0.01), 0.48),
-    "long-skirt": ((0.0, -0.57, 0.03), 0.86), "short-skirt": ((0.0, -0.37, 0.03), 0.66),
+    "long-sleeve-top": ((0.0, 0.06, 0.02), 1.66), "short-sleeve-top": ((0.0, 0.06, 0.02), 0.84),
+    "sleeveless-top": ((0.0, 0.06, 0.02), 0.84), "long-sleeve-dress": ((0.0, -0.22, 0.02), 1.66),
+    "short-sleeve-dress": ((0.0, -0.24, 0.02), 1.40), "sleeveless-dress": ((0.0, -0.24, 0.02), 1.40),
+    "long-pants": ((0.0, -0.735, 0.01), 1.14), "short-pants": ((0.0, -0.38, 0.01), 0.54),
+    "long-skirt": ((0.0, -0.68, 0.03), 1.00), "short-skirt": ((0.0, -0.415, 0.03), 0.62),
 }
 
 

@@ -1,4 +1,5 @@
-"""Render the figures of docs/body.md, docs/motions.md, docs/templates.md and docs/simulation.md.
+"""Render the figures of docs/body.md, docs/motions.md, docs/templates.md, docs/simulation.md and
+docs/dataset.md (``--dataset ROOT``: a contact sheet of a dataset made by ``darts dataset make``).
 
 Flat-shaded meshes drawn with the painter's algorithm, orthographic views.
 """
@@ -120,13 +121,52 @@ def simulation_figure(out: Path, scenes: list[tuple[str, str]], times: list[floa
     plt.close(fig)
 
 
+def dataset_figure(out: Path, root: Path) -> None:
+    """Per category (rows): two test pictures with their lines drawn at their projected pixels,
+    the first one's garment mask, and the same garment in the unseen-appearance part."""
+    import json
+
+    from PIL import Image
+
+    from darts.fileio import read_npz
+    from darts.templates.categories import CATEGORIES
+
+    def picture(folder: Path, lines: bool = True) -> np.ndarray:
+        image = np.asarray(Image.open(folder / "image.png")).copy()
+        if lines:
+            for points in read_npz(folder / "lines_px.npz").values():
+                col, row = np.clip(np.floor(points).astype(int), 0, image.shape[0] - 1).T
+                image[row, col] = [255, 40, 40]
+        return image
+
+    samples = sorted((root / "test").glob("*-0"))
+    fig, axes = plt.subplots(len(CATEGORIES), 4, figsize=(7.2, 18))
+    for row, category in enumerate(CATEGORIES):
+        mine = [f for f in samples if json.loads((f / "meta.json").read_text())["category"] == category][:2]
+        mask = np.asarray(Image.open(mine[0] / "mask.png"))
+        panels = [picture(mine[0]), np.stack([mask] * 3, -1), picture(mine[1]), picture(root / "test_unseen" / mine[0].name, False)]
+        for col, panel in enumerate(panels):
+            axes[row, col].imshow(panel)
+            axes[row, col].axis("off")
+        axes[row, 0].set_title(category, fontsize=8, loc="left")
+    fig.suptitle("test garment with its lines (red) | its mask | another test garment | the first in test_unseen", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=90)
+    plt.close(fig)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output-dir", default="docs/images")
     parser.add_argument("--simulation", action="store_true", help="only the simulation figure (runs the solver)")
+    parser.add_argument("--dataset", type=Path, metavar="ROOT", help="only the dataset's contact sheet")
     args = parser.parse_args()
     out = Path(args.output_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if args.dataset:
+        dataset_figure(out / "dataset.png", args.dataset)
+        print(f"wrote {out}/dataset.png")
+        return
     if args.simulation:
         simulation_figure(out / "simulation.png", [("short-sleeve-top", "walk"), ("tshirt-collar-tie", "wave"),
                                                    ("short-skirt", "run"), ("long-pants", "squat")], [0.0, 1.0, 2.0, 3.0])

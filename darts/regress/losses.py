@@ -34,7 +34,7 @@ def _masked_mean(values: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
 def nearest(a: torch.Tensor, b: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """Squared distances (cm^2) from every point of a [B,L,K,3] to its nearest in b [B,L,M,3], and
     from every point of b to its nearest in a: ([B,L,K], [B,L,M])."""
-    d = torch.cdist(a * CM, b * CM).square()
+    d = torch.cdist(a * CM, b * CM, compute_mode="donot_use_mm_for_euclid_dist").square()
     return d.min(3).values, d.min(2).values
 
 

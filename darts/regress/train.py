@@ -110,7 +110,7 @@ def train_classifier(train: Samples, val: Samples, epochs: int, seed: int, batch
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
-            losses.append(float(loss))
+            losses.append(float(loss.detach()))
             step += 1
         accuracy = float((classify(model, val.images).argmax(1) == val.categories).float().mean())
         history.loss.append(float(np.mean(losses)))
@@ -143,27 +143,50 @@ def mean_chamfer_cm(pred: torch.Tensor, samples: Samples) -> float:
     return float(chamfer_per_line(pred, samples.lines, squared=False)[samples.line_mask].mean())
 
 
+@torch.no_grad()
+def encode(encoder, images: torch.Tensor, generator: torch.Generator | None, batch: int = 64) -> list[torch.Tensor]:
+    """The encoder's maps of uint8 images [N,3,H,W] (augmented when a ``generator`` is given), float16."""
+    encoder.eval()
+    parts = [[m.half() for m in encoder(augment(images[i:i + batch], generator) if generator is not None
+                                          else as_input(images[i:i + batch]))] for i in range(0, len(images), batch)]
+    return [torch.cat([p[k] for p in parts]) for k in range(len(parts[0]))]
+
+
 def train_regressor(variant: str, train: Samples, val: Samples, epochs: int, seed: int, batch: int = 16,
-                    lr: float = 1e-3, progress: bool = True, **config) -> tuple[FeatureLineRegressor, History]:
-    """Eq. 1 with Adam; the validation metric is the unsquared Chamfer distance (cm)."""
+                    lr: float = 1e-3, progress: bool = True, encoder=None, copies: int = 3,
+                    **config) -> tuple[FeatureLineRegressor, History]:
+    """Eq. 1 with Adam; the validation metric is the unsquared Chamfer distance (cm). With a trained
+    ``encoder`` (the classifier's) the encoder is frozen: its maps of ``copies`` augmented versions
+    of every training picture are computed once and the rest of the network trains on them."""
     generator = seed_everything(seed)
-    model = FeatureLineRegressor(variant, **config)
-    optimizer = torch.optim.Adam(model.parameters(), lr=lr)
+    model = FeatureLineRegressor(variant, encoder=encoder, **config)
+    frozen = encoder is not None
+    if frozen:
+        for parameter in model.encoder.parameters():
+            parameter.requires_grad_(False)
+        cached = [encode(model.encoder, train.images, generator) for _ in range(copies)]
+    optimizer = torch.optim.Adam([p for p in model.parameters() if p.requires_grad], lr=lr)
     history, started, step = History(), time.perf_counter(), 0
     total = epochs * math.ceil(len(train) / batch)
     for epoch in range(epochs):
         model.train()
+        if frozen:
+            model.encoder.eval()  # its batch-norm statistics stay those it was trained with
         losses = []
         for rows in _batches(len(train), batch, generator):
             _schedule(optimizer, step, total, lr)
             part = train.index(rows)
-            outputs = model(augment(part.images, generator), part.cameras, part.initial, part.creases)
+            if frozen:
+                copy = cached[int(torch.randint(copies, (1,), generator=generator))]
+                outputs = model(None, part.cameras, part.initial, part.creases, maps=[m[rows].float() for m in copy])
+            else:
+                outputs = model(augment(part.images, generator), part.cameras, part.initial, part.creases)
             loss = regression_loss(outputs, part.lines, part.line_mask)
             optimizer.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 10.0)
             optimizer.step()
-            losses.append(float(loss))
+            losses.append(float(loss.detach()))
             step += 1
         history.loss.append(float(np.mean(losses)))
         history.validation.append(mean_chamfer_cm(regress(model, val), val))
@@ -172,6 +195,14 @@ def train_regressor(variant: str, train: Samples, val: Samples, epochs: int, see
                   f"{history.validation[-1]:.3f} cm", flush=True)
     history.seconds = time.perf_counter() - started
     return model, history
+
+
+def dataset_record(root: str | os.PathLike) -> dict:
+    """What made a dataset (its ``summary.json``): the command and the counts."""
+    import json
+
+    summary = json.loads((Path(root) / "summary.json").read_text())
+    return {key: summary[key] for key in ("command", "garments", "samples", "samples_per_split")}
 
 
 def save_checkpoint(path: str | os.PathLike, kind: str, model: torch.nn.Module, config: dict, record: dict) -> None:

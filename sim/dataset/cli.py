@@ -1,7 +1,8 @@
 """``darts dataset make OUT_DIR --count N``: the synthetic training set of the reconstruction networks
 (docs/dataset.md), made on Ray, resumable: re-running the same command makes only what is missing.
 
-Exit codes: 0 every garment and sample made, 1 some failed (see the manifests), 2 bad input.
+Exit codes: 0 every job done (garments whose drape left the body are dropped, and counted), 1 some
+job failed (see the manifests), 2 bad input.
 """
 from __future__ import annotations
 
@@ -58,7 +59,8 @@ def summarise(garments: list[dict], samples: list[dict], args) -> dict:
         "command": f"darts dataset make OUT_DIR --count {args.count} --seed {args.seed} --views {args.views}"
                    + (f" --categories {' '.join(args.categories)}" if args.categories else ""),
         "garments": len(ok_garments), "samples": len(ok_samples),
-        "garments_failed": {r["id"]: r["error"] for r in garments if r["status"] != "ok"},
+        "garments_dropped": {r["id"]: r["error"] for r in garments if r["status"] == "unstable"},
+        "garments_failed": {r["id"]: r["error"] for r in garments if r["status"] == "failed"},
         "samples_failed": {r["id"]: r["error"] for r in samples if r["status"] != "ok"},
         "samples_per_split": dict(Counter(split_of[r["id"]] for r in ok_samples)),
         "samples_per_category": dict(sorted(Counter(r["category"] for r in ok_samples).items())),
@@ -105,6 +107,8 @@ def make(args) -> int:
         tmp.write_text(json.dumps(summary, indent=1))
     print(f"{summary['samples']} samples of {summary['garments']} garments: "
           + ", ".join(f"{k} {v}" for k, v in sorted(summary["samples_per_split"].items())))
+    if summary["garments_dropped"]:
+        print(f"{len(summary['garments_dropped'])} garments dropped (their drape left the body or blew up)")
     failed = len(summary["garments_failed"]) + len(summary["samples_failed"])
     if failed:
         print(f"{failed} jobs failed; see {out / GARMENTS / MANIFEST} and {out / MANIFEST}")

@@ -1,8 +1,9 @@
 """The two kinds of dataset job (``darts.jobs``): make a garment, render a sample of it.
 
 A **garment** job (``OUT_DIR/garments/<gid>/``): the category's template on the recipe's body
-shape, deformed by the CRDL towards the recipe's edits, draped 0.5 s on the still body (failed
-if its waist or neckline slid more than MAX_DROP down the body); it writes
+shape, deformed by the CRDL towards the recipe's edits, draped 0.5 s on the still body (status
+"unstable", and no samples, if the drape blew up or its waist or neckline slid more than MAX_DROP
+down the body: a deterministic outcome, kept and not made again); it writes
 ``garment.npz`` (the DART before the drape), ``draped.npz`` (``vertices`` [V,3] float32 canonical
 frame, ``faces`` [F,3]: the DART's own mesh after the drape), ``lines.npz`` (each feature line of the
 draped garment, LINE_POINTS points evenly spaced along its arc) and ``meta.json``.
@@ -92,9 +93,9 @@ def make_garment(job: Job, folder: Path) -> dict:
             "drape": {"seconds": DRAPE_SECONDS, "stable": draped.stable, "max_penetration": draped.max_penetration,
                       "message": draped.message}, "times": times}
     _write_json(folder / "meta.json", meta)
-    if drop > MAX_DROP:
-        raise RuntimeError(f"the {top} slid {100 * drop:.1f} cm down in the drape (at most {100 * MAX_DROP:.0f} cm)")
-    return {"status": "ok" if draped.stable else "unstable", "error": draped.message, "category": recipe.category,
+    slid = f"the {top} slid {100 * drop:.1f} cm down in the drape (at most {100 * MAX_DROP:.0f} cm)" if drop > MAX_DROP else ""
+    return {"status": "ok" if draped.stable and not slid else "unstable", "error": draped.message or slid,
+            "category": recipe.category,
             "split": recipe.split, "vertices": len(dart.vertices), "drape_penetration": draped.max_penetration,
             "drape_drop": drop, "crdl_handle_rmse": report["handle_rmse"], **times}
 
