@@ -52,15 +52,11 @@ class Camera:
     @classmethod
     def from_json(cls, path: str | os.PathLike) -> "Camera":
         """Read and check ``camera.json`` (see the module docstring)."""
+        from darts.fileio import read_input
+
+        text = read_input(path, "camera file")
         try:
-            with open(path, "rb") as handle:
-                data = json.loads(handle.read().decode("utf-8"))
-        except FileNotFoundError:
-            raise DartsInputError(path, "no such file") from None
-        except IsADirectoryError:
-            raise DartsInputError(path, "is a directory, not a camera file") from None
-        except OSError as exc:
-            raise DartsInputError(path, f"cannot be read ({exc.strerror or exc})") from None
+            data = json.loads(text.decode("utf-8"))
         except (ValueError, UnicodeDecodeError) as exc:
             raise DartsInputError(path, f"not a JSON camera ({exc})") from None
         return cls.from_dict(data, path)

@@ -32,6 +32,20 @@ def atomic_path(path: str | os.PathLike, keep_suffix: bool = False):
             os.unlink(tmp)
 
 
+def read_input(path: str | os.PathLike, kind: str) -> bytes:
+    """The bytes of the input file ``path`` (a ``kind``: "camera file", "batch SPEC", ...), or a
+    DartsInputError saying what it is instead: missing, a directory, unreadable."""
+    path = Path(path)
+    try:
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise DartsInputError(path, "no such file") from None
+    except IsADirectoryError:
+        raise DartsInputError(path, f"is a directory, not a {kind}") from None
+    except OSError as exc:
+        raise DartsInputError(path, f"cannot be read ({exc.strerror or exc})") from None
+
+
 def check_output(path: str | os.PathLike, suffixes: tuple[str, ...] | None = None) -> Path:
     """``path`` as a Path, or a DartsInputError if a file cannot be written there: a suffix not in
     ``suffixes``, an existing directory, a parent that is a file or cannot be created or written.

@@ -62,14 +62,15 @@ def camera_batch(cameras: list[Camera]) -> CameraBatch:
 
 @dataclass
 class Samples:
-    """Every sample of one split: ids [N], images uint8 [N,3,H,W], masks bool [N,H,W], category
-    indices [N] (CATEGORY_IDS), cameras, ground-truth and initial lines [N,4,K,3], mask and crease
-    indices [N,4]."""
+    """Every sample of one split: ids [N], images uint8 [N,3,H,W], garment masks and foreground
+    (garment or body) masks bool [N,H,W], category indices [N] (CATEGORY_IDS), cameras,
+    ground-truth and initial lines [N,4,K,3], mask and crease indices [N,4]."""
 
     ids: list[str]
     folders: list[Path]
     images: torch.Tensor
     masks: torch.Tensor
+    foreground: torch.Tensor
     categories: torch.Tensor
     cameras: CameraBatch
     lines: torch.Tensor
@@ -84,7 +85,7 @@ class Samples:
         rows = torch.as_tensor(rows)
         pick = lambda t: t[rows]  # noqa: E731
         return Samples([self.ids[i] for i in rows.tolist()], [self.folders[i] for i in rows.tolist()], pick(self.images),
-                       pick(self.masks), pick(self.categories), self.cameras.index(rows), pick(self.lines),
+                       pick(self.masks), pick(self.foreground), pick(self.categories), self.cameras.index(rows), pick(self.lines),
                        pick(self.initial), pick(self.line_mask), pick(self.creases))
 
 
@@ -108,11 +109,12 @@ def load_split(root: str | Path, split: str, limit: int | None = None) -> Sample
     folders = sorted(p for p in (Path(root) / split).glob("*") if (p / "image.png").is_file())[:limit]
     if not folders:
         raise DartsInputError(Path(root) / split, "holds no samples (make them with darts dataset make)")
-    images, masks, categories, cameras, lines, initial, line_masks, creases = ([] for _ in range(8))
+    images, masks, foreground, categories, cameras, lines, initial, line_masks, creases = ([] for _ in range(9))
     for folder in folders:
         category = json.loads((folder / "meta.json").read_text())["category"]
         images.append(read_image(folder / "image.png").transpose(2, 0, 1))
         masks.append(read_image(folder / "mask.png", "L") > 127)
+        foreground.append(masks[-1] | (read_image(folder / "body_mask.png", "L") > 127))
         categories.append(CATEGORY_IDS.index(category))
         cameras.append(Camera.from_json(folder / "camera.json"))
         truth, mask, crease = padded(category, read_npz(folder / "lines.npz"))
@@ -121,5 +123,5 @@ def load_split(root: str | Path, split: str, limit: int | None = None) -> Sample
         line_masks.append(mask)
         creases.append(crease)
     return Samples([f.name for f in folders], folders, torch.from_numpy(np.stack(images)), torch.from_numpy(np.stack(masks)),
-                   torch.tensor(categories), camera_batch(cameras), torch.from_numpy(np.stack(lines)),
+                   torch.from_numpy(np.stack(foreground)), torch.tensor(categories), camera_batch(cameras), torch.from_numpy(np.stack(lines)),
                    torch.from_numpy(np.stack(initial)), torch.from_numpy(np.stack(line_masks)), torch.tensor(np.stack(creases)))

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from darts.errors import DartsInputError
+from darts.fileio import read_input
 from darts.jobs import Job, safe_id
 
 #: SPEC sim keys -> (darts-sim flag, kind). A bool "off" key passes its flag when false.
@@ -58,14 +59,7 @@ class SeamSet:
 def read_spec(path: str | os.PathLike) -> dict:
     """The SPEC document: TOML (``.toml``) or JSON (anything else)."""
     path = Path(path)
-    try:
-        text = path.read_bytes()
-    except IsADirectoryError:
-        raise DartsInputError(path, "is a directory, not a batch SPEC") from None
-    except FileNotFoundError:
-        raise DartsInputError(path, "no such file") from None
-    except OSError as exc:
-        raise DartsInputError(path, f"cannot be read ({exc.strerror or exc})") from None
+    text = read_input(path, "batch SPEC")
     try:
         if path.suffix.lower() == ".toml":
             import tomllib

@@ -1,0 +1,83 @@
+"""`darts reconstruct` and `darts classify` on the shipped sample picture (a held-out test picture of
+the dataset), and their bad input."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from darts.dart.io import load_dart
+from darts.fileio import read_npz, save_npz
+from darts.regress.data import initial_lines
+from darts.templates.categories import CATEGORIES
+
+SAMPLE = Path(__file__).parents[1] / "scenes" / "reconstruct"
+META = json.loads((SAMPLE / "sample.json").read_text())
+
+
+def _line_error_cm(lines: dict, truth: dict) -> float:
+    """Unsquared Chamfer (cm, both directions averaged) over the lines."""
+    errors = []
+    for name, points in truth.items():
+        d = np.linalg.norm(np.asarray(lines[name])[:, None] - points[None], axis=2)
+        errors.append(50 * (d.min(1).mean() + d.min(0).mean()))
+    return float(np.mean(errors))
+
+
+def test_classify_names_the_sample_garment(run_darts):
+    code, out, err = run_darts("classify", SAMPLE / "image.png", "--json")
+    assert code == 0, err
+    ranked = json.loads(out)
+    assert ranked[0]["category"] == META["category"] and ranked[0]["probability"] > 0.5
+    assert len(ranked) == 3 and ranked[0]["probability"] >= ranked[1]["probability"]
+
+
+def test_reconstruct_then_simulate_the_sample(run_darts, tmp_path):
+    still = tmp_path / "still.npz"  # a three-frame AMASS motion: the body standing in its rest pose
+    save_npz(still, poses=np.zeros((3, 156)), trans=np.tile([0.0, 0.0, 1.0], (3, 1)), betas=np.zeros(16),
+             gender=np.array("neutral"), mocap_framerate=np.array(30.0))
+    out, report, usd = tmp_path / "garment.npz", tmp_path / "report.json", tmp_path / "sim.usdc"
+    code, stdout, err = run_darts("reconstruct", SAMPLE / "image.png", "--mask", SAMPLE / "mask.png", "--camera",
+                                  SAMPLE / "camera.json", "--betas", *META["betas"], "--edge-length", "0.03",
+                                  "-o", out, "--report", report, "--simulate", still, "--sim-out", usd)
+    assert code == 0, err
+    data = json.loads(report.read_text())
+    assert data["category"] == META["category"] and 0.5 < data["probability"] <= 1.0 and data["silhouette"]
+    assert {"classify_s", "regress_s", "template_s", "crdl_s", "total_s"} <= set(data["times"])
+    truth = read_npz(SAMPLE / "lines.npz")
+    template = dict(zip(CATEGORIES[META["category"]].line_names, initial_lines(META["category"])))
+    regressed = _line_error_cm(data["lines"], truth)
+    assert regressed < 0.6 * _line_error_cm(template, truth), (regressed, _line_error_cm(template, truth))
+    dart = load_dart(out)
+    assert dart.category == META["category"] and len(dart.seams) > 0 and np.allclose(dart.body_betas, META["betas"], atol=1e-4)
+    assert data["crdl"]["penetration"] <= 0.01 and data["crdl"]["handle_rmse"] < 0.01
+    assert usd.is_file() and "wrote" in stdout
+
+
+@pytest.mark.parametrize("case, problem", [
+    ("not an image", "not an image"),
+    ("mask size", "the mask is 100x100 pixels but the image is 224x224"),
+    ("camera", "not a JSON camera"),
+    ("category", "unknown category 'poncho'"),
+])
+def test_bad_reconstruct_input_is_one_line_exit_2_and_no_output(case, problem, tmp_path, run_darts):
+    image, mask, camera = SAMPLE / "image.png", SAMPLE / "mask.png", SAMPLE / "camera.json"
+    extra = []
+    if case == "not an image":
+        image = tmp_path / "image.png"
+        image.write_bytes(b"\x89PNG this is not a picture")
+    elif case == "mask size":
+        mask = tmp_path / "mask.png"
+        Image.fromarray(np.full((100, 100), 255, np.uint8)).save(mask)
+    elif case == "camera":
+        camera = tmp_path / "camera.json"
+        camera.write_text("{ width: 224")
+    else:
+        extra = ["--category", "poncho"]
+    out = tmp_path / "garment.npz"
+    code, stdout, err = run_darts("reconstruct", image, "--mask", mask, "--camera", camera, "-o", out, *extra)
+    assert code == 2 and stdout == "" and len(err.strip().splitlines()) == 1 and problem in err, err
+    assert not out.exists() and list(tmp_path.glob("*.npz")) == []
