@@ -1,9 +1,11 @@
 """Jobs per hour of `darts batch` on Ray against a serial loop over the same jobs, in one script.
 
-    python benchmarks/batch.py [--spec scenes/batch/example.toml] [--frames 30] [--out docs/data/benchmark_batch.json]
+    python benchmarks/batch.py [--spec scenes/batch/example.toml] [--frames 30] [--materials own silk]
+        [--out docs/data/benchmark_batch.json]
 
-The jobs are the SPEC's (default: the shipped example, 2 garments x 2 motions x 2 body shapes),
-run with ``--frames`` recorded frames each. The serial baseline is what a user would write: one
+The jobs are the SPEC's (default: the shipped example, 2 garments x 2 motions x 2 body shapes)
+times ``--materials`` (default: each DART's own and silk: 16 jobs), run with ``--frames``
+recorded frames each. The serial baseline is what a user would write: one
 process, the jobs one after another (``darts.jobs.run_one``, the same job function), torch at its
 default threading. Ray runs them with ``darts.jobs.run_jobs`` on ``--workers`` (default: every
 core), its start-up (about 6 s) included in its wall time.
@@ -26,12 +28,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--spec", type=Path, default=Path("scenes/batch/example.toml"))
     parser.add_argument("--frames", type=int, default=30)
+    parser.add_argument("--materials", nargs="+", default=["own", "silk"])
     parser.add_argument("--workers", type=int, default=os.cpu_count())
     parser.add_argument("--out", type=Path, default=Path("docs/data/benchmark_batch.json"))
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         spec = Path(tmp) / args.spec.name
-        spec.write_text(args.spec.read_text().replace("frames = 6", f"frames = {args.frames}"))
+        text = args.spec.read_text().replace("frames = 6", f"frames = {args.frames}")
+        spec.write_text(text.replace("[sweep]", f"[sweep]\nmaterials = {json.dumps(args.materials)}"))
         jobs = load_jobs(spec)
         started = time.perf_counter()
         serial = [run_one(run_simulation, job, Path(tmp) / "serial") for job in jobs]
@@ -42,7 +46,7 @@ def main() -> None:
         ray_s = time.perf_counter() - started
     failed = [row["id"] for row in serial + parallel if row["status"] != "ok"]
     result = {
-        "jobs": len(jobs), "frames_per_job": args.frames, "workers": args.workers, "cores": os.cpu_count(),
+        "jobs": len(jobs), "frames_per_job": args.frames, "materials": args.materials, "workers": args.workers, "cores": os.cpu_count(),
         "serial_seconds": round(serial_s, 2), "ray_seconds": round(ray_s, 2),
         "serial_jobs_per_hour": round(3600 * len(jobs) / serial_s, 1), "ray_jobs_per_hour": round(3600 * len(jobs) / ray_s, 1),
         "speedup": round(serial_s / ray_s, 3), "failed": failed,

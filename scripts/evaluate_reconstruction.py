@@ -78,15 +78,15 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
     from darts.raycast import cast
     from darts.regress.data import read_image
     from darts.regress.pipeline import reconstruct
+    from darts.regress.pipeline import EDGE_LENGTH
     from sim.cli import execute, parser
-    from sim.dataset.recipe import EDGE_LENGTH
 
     sample = Path(job.inputs["sample"])
     meta = json.loads((sample / "meta.json").read_text())
     body = load_body(None)
     image, mask = read_image(sample / "image.png"), read_image(sample / "mask.png", "L") > 127
     camera = Camera.from_json(sample / "camera.json")
-    result = reconstruct(image, body, None, camera, mask, betas=meta["betas"], edge_length=EDGE_LENGTH)
+    result = reconstruct(image, body, None, camera, mask, betas=meta["betas"])
     baseline = make_dart(result.report["category"], body, betas=np.asarray(meta["betas"]), edge_length=EDGE_LENGTH)
     draped = read_npz(sample / "draped.npz")
     truth = SurfaceDistance(draped["vertices"], draped["faces"])

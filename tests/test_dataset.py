@@ -120,3 +120,14 @@ def test_dataset_into_a_file_is_refused(tmp_path, run_darts):
     target.write_text("")
     code, _, err = run_darts("dataset", "make", target, "--count", "2")
     assert code == 2 and "exists and is not a directory" in err and target.read_text() == ""
+
+
+def test_darts_deform_runs_on_a_sample(made, run_darts, tmp_path):
+    out, rows = made
+    split, name = rows["short-pants"][0]["id"].split("-", 1)
+    sample = out / split / name
+    code, _, err = run_darts("deform", sample / "garment.npz", "--lines", sample / "lines.npz", "--mask", sample / "mask.png",
+                             "--camera", sample / "camera.json", "-o", tmp_path / "fitted.npz", "--report", tmp_path / "r.json")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["handle_rmse"] < 0.005 and report["penetration"] <= 0.01

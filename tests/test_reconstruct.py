@@ -41,7 +41,7 @@ def test_reconstruct_then_simulate_the_sample(run_darts, tmp_path):
              gender=np.array("neutral"), mocap_framerate=np.array(30.0))
     out, report, usd = tmp_path / "garment.npz", tmp_path / "report.json", tmp_path / "sim.usdc"
     code, stdout, err = run_darts("reconstruct", SAMPLE / "image.png", "--mask", SAMPLE / "mask.png", "--camera",
-                                  SAMPLE / "camera.json", "--betas", *META["betas"], "--edge-length", "0.03",
+                                  SAMPLE / "camera.json", "--betas", *META["betas"], "--edge-length", "0.04",
                                   "-o", out, "--report", report, "--simulate", still, "--sim-out", usd)
     assert code == 0, err
     data = json.loads(report.read_text())
