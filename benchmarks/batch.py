@@ -1,6 +1,6 @@
 """Jobs per hour of `darts batch` on Ray against a serial loop over the same jobs, in one script.
 
-    python benchmarks/batch.py [--spec scenes/batch/example.toml] [--frames 30] [--materials own silk]
+    python benchmarks/batch.py [--spec scenes/batch/example.toml] [--frames 60] [--materials own silk]
         [--out docs/data/benchmark_batch.json]
 
 The jobs are the SPEC's (default: the shipped example, 2 garments x 2 motions x 2 body shapes)
@@ -27,7 +27,7 @@ from sim.batch.spec import load_jobs
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--spec", type=Path, default=Path("scenes/batch/example.toml"))
-    parser.add_argument("--frames", type=int, default=30)
+    parser.add_argument("--frames", type=int, default=60)
     parser.add_argument("--materials", nargs="+", default=["own", "silk"])
     parser.add_argument("--workers", type=int, default=os.cpu_count())
     parser.add_argument("--out", type=Path, default=Path("docs/data/benchmark_batch.json"))

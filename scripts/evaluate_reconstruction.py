@@ -3,7 +3,9 @@ docs/data/reconstruction.json and the figures of docs/reconstruction.md, prints 
 
     python scripts/evaluate_reconstruction.py --data ~/.cache/darts/dataset-s0 [--end-to-end 20]
 
-1. Classifier: accuracy on val, test and test_unseen, confusion matrices (figure).
+1. Classifier: accuracy on val, test and test_unseen, confusion matrices (figure), on the
+   picture as it is and on the garment alone (its mask given: what ``darts reconstruct --mask``
+   and ``darts classify --mask`` do).
 2. Table 1: Chamfer distance between predicted and ground-truth lines for Upper (the three tops),
    Lower (the two pants) and Skirts (the two skirts and the three dresses: the garments whose tube
    spans both legs, the paper's "dress categories", Fig. 3), for P2M-GCN, Im-Guided STM and ours,
@@ -40,6 +42,7 @@ from darts.templates.categories import CATEGORIES
 GROUPS = {"Upper": "top", "Lower": "pants", "Skirts": ("skirt", "dress")}
 METHODS = {"p2m-gcn": "P2M-GCN", "im-stm": "Im-Guided STM", "ours": "Ours"}
 PARTS = ("test", "test_unseen")
+CLASSIFIER_INPUTS = {"picture": "the picture", "garment_alone": "the garment alone (mask given)"}
 
 
 def group_of(category: str) -> str:
@@ -123,10 +126,12 @@ def main() -> None:
     classifier, classifier_record = shipped_model("classifier", "classifier")
     result = {"classifier": {"record": {k: v for k, v in classifier_record.items() if k not in ("loss",)}}, "lines": {}}
     for name, samples in parts.items():
-        predicted = classify(classifier, samples.images).argmax(1)
-        result["classifier"][name] = {"samples": len(samples),
-                                      "accuracy": float((predicted == samples.categories).float().mean()),
-                                      "confusion": confusion(predicted.numpy(), samples.categories.numpy()).tolist()}
+        result["classifier"][name] = {"samples": len(samples)}
+        for mode, garment in (("picture", None), ("garment_alone", samples.masks)):
+            predicted = classify(classifier, samples.images, garment).argmax(1)
+            result["classifier"][name][mode] = {
+                "accuracy": float((predicted == samples.categories).float().mean()),
+                "confusion": confusion(predicted.numpy(), samples.categories.numpy()).tolist()}
     for name in PARTS:
         samples = parts[name]
         result["lines"][name] = {"initial F_g": line_errors(samples.initial, samples)}
@@ -150,9 +155,11 @@ def main() -> None:
 
 def tables(result: dict) -> str:
     """The Markdown tables of docs/reconstruction.md."""
-    out = ["| part | val | test | test_unseen |", "|---|---|---|---|",
-           "| classifier accuracy | " + " | ".join(f"{100 * result['classifier'][p]['accuracy']:.2f} % "
-                                                  f"({result['classifier'][p]['samples']})" for p in ("val",) + PARTS) + " |", ""]
+    out = ["| classifier accuracy | val | test | test_unseen |", "|---|---|---|---|"]
+    for mode, label in CLASSIFIER_INPUTS.items():
+        out.append(f"| {label} | " + " | ".join(f"{100 * result['classifier'][p][mode]['accuracy']:.2f} % "
+                                               f"({result['classifier'][p]['samples']})" for p in ("val",) + PARTS) + " |")
+    out.append("")
     for part in PARTS:
         lines = result["lines"][part]
         out += [f"**{part}** — Chamfer distance, cm (cm² in brackets)", "",
@@ -177,18 +184,19 @@ def figures(result: dict, folder: Path) -> None:
     from matplotlib.figure import Figure
 
     folder.mkdir(parents=True, exist_ok=True)
-    figure = Figure(figsize=(12, 5.2))
-    for k, part in enumerate(PARTS):
-        ax = figure.add_subplot(1, 2, k + 1)
-        matrix = np.asarray(result["classifier"][part]["confusion"])
+    figure = Figure(figsize=(12, 10.4))
+    for k, (part, mode) in enumerate((p, m) for m in CLASSIFIER_INPUTS for p in PARTS):
+        ax = figure.add_subplot(2, 2, k + 1)
+        matrix = np.asarray(result["classifier"][part][mode]["confusion"])
         ax.imshow(matrix / np.maximum(matrix.sum(1, keepdims=True), 1), cmap="Blues", vmin=0, vmax=1)
         for (i, j), n in np.ndenumerate(matrix):
             if n:
                 ax.text(j, i, str(n), ha="center", va="center", fontsize=7, color="white" if i == j else "black")
         ax.set_xticks(range(len(CATEGORY_IDS)), CATEGORY_IDS, rotation=70, fontsize=7)
-        ax.set_yticks(range(len(CATEGORY_IDS)), CATEGORY_IDS if k == 0 else [], fontsize=7)
+        ax.set_yticks(range(len(CATEGORY_IDS)), CATEGORY_IDS if k % 2 == 0 else [], fontsize=7)
         ax.set_xlabel("predicted")
-        ax.set_title(f"{part}: {100 * result['classifier'][part]['accuracy']:.2f} %")
+        ax.set_title(f"{part}, {CLASSIFIER_INPUTS[mode]}: {100 * result['classifier'][part][mode]['accuracy']:.2f} %",
+                     fontsize=9)
     figure.tight_layout()
     figure.savefig(folder / "reconstruction_confusion.png", dpi=110)
     figure = Figure(figsize=(12, 3.6))

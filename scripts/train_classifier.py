@@ -31,7 +31,8 @@ def main() -> None:
     model, history = train_classifier(train, val, args.epochs, args.seed)
     record = {"command": "python " + shlex.join(sys.argv), "seed": args.seed, "epochs": args.epochs,
               "dataset": dataset_record(args.data), "train_samples": len(train), "val_samples": len(val),
-              "loss": history.loss, "val_accuracy": history.validation, "train_seconds": round(history.seconds, 1)}
+              "loss": history.loss, "val_accuracy": history.validation,
+              "val_accuracy_garment_alone": history.validation_alone, "train_seconds": round(history.seconds, 1)}
     save_checkpoint(args.out, "classifier", model, {"classes": 10}, record)
     print(f"wrote {args.out}: validation accuracy {100 * history.validation[-1]:.2f} % after {history.seconds / 60:.1f} min")
 

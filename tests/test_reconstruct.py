@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 from PIL import Image
 
 from darts.dart.io import load_dart
@@ -27,12 +28,26 @@ def _line_error_cm(lines: dict, truth: dict) -> float:
     return float(np.mean(errors))
 
 
-def test_classify_names_the_sample_garment(run_darts):
-    code, out, err = run_darts("classify", SAMPLE / "image.png", "--json")
+@pytest.mark.parametrize("mask", [False, True], ids=["picture", "garment-alone"])
+def test_classify_names_the_sample_garment(run_darts, mask):
+    code, out, err = run_darts("classify", SAMPLE / "image.png", "--json", *(["--mask", SAMPLE / "mask.png"] if mask else []))
     assert code == 0, err
     ranked = json.loads(out)
     assert ranked[0]["category"] == META["category"] and ranked[0]["probability"] > 0.5
     assert len(ranked) == 3 and ranked[0]["probability"] >= ranked[1]["probability"]
+
+
+def test_the_garment_alone_hides_everything_outside_its_mask():
+    """With a mask the classifier's input outside it is one grey whatever the background."""
+    from darts.regress.data import read_image
+    from darts.regress.pipeline import network_input, network_mask
+    from darts.regress.train import NEUTRAL, garment_only
+
+    image, mask = read_image(SAMPLE / "image.png"), read_image(SAMPLE / "mask.png", "L") > 127
+    other = image.copy()
+    other[~mask] = 255 - other[~mask]
+    x, y = (garment_only(network_input(i), network_mask(mask)) for i in (image, other))
+    assert torch.equal(x, y) and torch.all(x[0][:, ~torch.from_numpy(mask)] == NEUTRAL)
 
 
 def test_reconstruct_then_simulate_the_sample(run_darts, tmp_path):

@@ -18,10 +18,18 @@ def _image(path: str):
     return read_image(path)
 
 
+def _mask(path: str | None, image):
+    """The garment mask [H,W] bool of ``image`` read from ``path`` (None without one)."""
+    from darts.crdl.silhouette import read_mask
+
+    return None if path is None else read_mask(path, image.shape[1], image.shape[0], "the image")
+
+
 def classify(args) -> int:
     from darts.regress.pipeline import classify_image
 
-    ranked = classify_image(_image(args.image))[: args.top]
+    image = _image(args.image)
+    ranked = classify_image(image, _mask(args.mask, image))[: args.top]
     if args.json:
         print(json.dumps([{"category": c, "probability": p} for c, p in ranked], indent=1))
     else:
@@ -34,7 +42,6 @@ def reconstruct(args) -> int:
     from darts.body.io import load_body
     from darts.camera import Camera
     from darts.dart.io import save_dart
-    from darts.regress.data import read_image
     from darts.regress.pipeline import reconstruct as run
     from darts.templates.categories import CATEGORIES
 
@@ -52,15 +59,7 @@ def reconstruct(args) -> int:
     if camera is not None and (camera.width, camera.height) != (image.shape[1], image.shape[0]):
         raise DartsInputError(args.camera, f"is {camera.width}x{camera.height} pixels but the image is "
                                            f"{image.shape[1]}x{image.shape[0]}")
-    mask = None
-    if args.mask:
-        grey = read_image(args.mask, "L")
-        if grey.shape != image.shape[:2]:
-            raise DartsInputError(args.mask, f"the mask is {grey.shape[1]}x{grey.shape[0]} pixels but the image is "
-                                             f"{image.shape[1]}x{image.shape[0]}")
-        mask = grey > 127
-        if not mask.any():
-            raise DartsInputError(args.mask, "the mask is empty (no pixel above half grey)")
+    mask = _mask(args.mask, image)
     body = load_body(args.body)
     if args.betas is not None and len(args.betas) > body.num_betas:
         raise DartsInputError(None, f"--betas has {len(args.betas)} values, the body has {body.num_betas}")
@@ -95,7 +94,8 @@ def add_parsers(groups) -> None:
                     "and write a DART. Without --camera the dataset's default camera of the category is assumed.")
     parser.add_argument("image", metavar="IMAGE", help="RGB picture (PNG/JPEG), 224 x 224 or resized to it")
     parser.add_argument("-o", "--output", required=True, metavar="garment.npz")
-    parser.add_argument("--mask", metavar="MASK", help="garment mask, the image's size (white = garment)")
+    parser.add_argument("--mask", metavar="MASK", help="garment mask, the image's size (white = garment): the CRDL's "
+                        "silhouette term, and the classifier sees the garment alone")
     parser.add_argument("--camera", metavar="camera.json", help="the picture's camera (docs/crdl.md)")
     parser.add_argument("--category", help="skip the classifier")
     parser.add_argument("--body", metavar="PATH", help="SMPL-format body (default: the bundled body)")
@@ -110,6 +110,8 @@ def add_parsers(groups) -> None:
     parser.set_defaults(run=reconstruct)
     classifier = groups.add_parser("classify", help="the garment categories of a picture, most likely first")
     classifier.add_argument("image", metavar="IMAGE")
+    classifier.add_argument("--mask", metavar="MASK", help="garment mask (white = garment): classify the garment alone, "
+                            "without its background (more robust to unseen backgrounds, docs/reconstruction.md)")
     classifier.add_argument("--top", type=int, default=3, help="how many categories to print (default 3)")
     classifier.add_argument("--json", action="store_true", help="print JSON")
     classifier.set_defaults(run=classify)

@@ -16,8 +16,9 @@ from darts.errors import DartsInputError
 SIGMA = 1.0  # pixels: the width of a triangle's soft edge
 
 
-def read_mask(path: str | os.PathLike, camera: Camera) -> np.ndarray:
-    """A garment mask image as bool [height, width] (garment where the grey level is above half)."""
+def read_mask(path: str | os.PathLike, width: int, height: int, of: str = "the camera") -> np.ndarray:
+    """A garment mask image as bool [height, width] (garment where the grey level is above half);
+    a DartsInputError when it is not ``width`` x ``height`` (the size of ``of``) or empty."""
     from PIL import Image, UnidentifiedImageError
 
     try:
@@ -27,9 +28,8 @@ def read_mask(path: str | os.PathLike, camera: Camera) -> np.ndarray:
         raise DartsInputError(path, "no such file") from None
     except (UnidentifiedImageError, OSError) as exc:
         raise DartsInputError(path, f"not an image ({exc})") from None
-    if grey.shape != (camera.height, camera.width):
-        raise DartsInputError(path, f"the mask is {grey.shape[1]}x{grey.shape[0]} pixels but the camera is "
-                                    f"{camera.width}x{camera.height}")
+    if grey.shape != (height, width):
+        raise DartsInputError(path, f"the mask is {grey.shape[1]}x{grey.shape[0]} pixels but {of} is {width}x{height}")
     mask = grey > 0.5
     if not mask.any():
         raise DartsInputError(path, "the mask is empty (no pixel above half grey)")
@@ -89,7 +89,7 @@ class Silhouette:
     @classmethod
     def from_files(cls, mask_path, camera_path) -> "Silhouette":
         camera = Camera.from_json(camera_path)
-        return cls(read_mask(mask_path, camera), camera)
+        return cls(read_mask(mask_path, camera.width, camera.height), camera)
 
     def bind(self, faces: np.ndarray) -> "Silhouette":
         """The same term for the mesh with ``faces`` (the welded garment's)."""

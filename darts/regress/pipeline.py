@@ -55,11 +55,25 @@ def scaled(camera: Camera, width: int, height: int) -> Camera:
     return replace(camera, width=width, height=height, fx=camera.fx * sx, fy=camera.fy * sy, cx=camera.cx * sx, cy=camera.cy * sy)
 
 
+def network_mask(mask: np.ndarray) -> torch.Tensor:
+    """bool [H,W] -> bool [1,224,224] (nearest resize when the size differs)."""
+    m = torch.from_numpy(np.array(mask, np.float32))[None, None]
+    if m.shape[-2:] != (IMAGE_SIZE, IMAGE_SIZE):
+        m = torch.nn.functional.interpolate(m, size=(IMAGE_SIZE, IMAGE_SIZE), mode="nearest")
+    return m[0] > 0.5
+
+
 @torch.no_grad()
-def classify_image(image: np.ndarray) -> list[tuple[str, float]]:
-    """Every category with its probability, most likely first."""
+def classify_image(image: np.ndarray, mask: np.ndarray | None = None) -> list[tuple[str, float]]:
+    """Every category with its probability, most likely first; with the garment's ``mask`` [H,W]
+    the classifier sees the garment alone on grey (``darts.regress.train.garment_only``)."""
+    from darts.regress.train import garment_only
+
     model, _ = shipped_model("classifier", "classifier")
-    probabilities = torch.softmax(model(network_input(image)), 1)[0].numpy()
+    x = network_input(image)
+    if mask is not None:
+        x = garment_only(x, network_mask(mask))
+    probabilities = torch.softmax(model(x), 1)[0].numpy()
     order = np.argsort(-probabilities)
     return [(CATEGORY_IDS[i], float(probabilities[i])) for i in order]
 
@@ -90,14 +104,14 @@ EDGE_LENGTH = 0.02
 def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
                 mask: np.ndarray | None = None, betas=None, edge_length: float = EDGE_LENGTH) -> Reconstruction:
     """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
-    switches the CRDL's silhouette term on."""
+    switches the CRDL's silhouette term on and shows the classifier the garment alone."""
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
     from darts.crdl.silhouette import Silhouette
 
     times, started = {}, time.perf_counter()
     if category is None:
-        ranked = classify_image(image)
+        ranked = classify_image(image, mask)
         category, probability = ranked[0]
         times["classify_s"] = time.perf_counter() - started
     else:
