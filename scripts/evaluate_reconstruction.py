@@ -81,7 +81,7 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
     from darts.raycast import cast
     from darts.regress.data import read_image
     from darts.regress.pipeline import reconstruct
-    from darts.regress.pipeline import EDGE_LENGTH
+    from darts.templates.build import DATASET_EDGE_LENGTH
     from sim.cli import execute, parser
 
     sample = Path(job.inputs["sample"])
@@ -90,7 +90,7 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
     image, mask = read_image(sample / "image.png"), read_image(sample / "mask.png", "L") > 127
     camera = Camera.from_json(sample / "camera.json")
     result = reconstruct(image, body, None, camera, mask, betas=meta["betas"])
-    baseline = make_dart(result.report["category"], body, betas=np.asarray(meta["betas"]), edge_length=EDGE_LENGTH)
+    baseline = make_dart(result.report["category"], body, betas=np.asarray(meta["betas"]), edge_length=DATASET_EDGE_LENGTH)
     draped = read_npz(sample / "draped.npz")
     truth = SurfaceDistance(draped["vertices"], draped["faces"])
     shaped = body.shaped(np.asarray(meta["betas"]))[0][0].double().numpy()

@@ -8,6 +8,7 @@ import sys
 
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
+from darts.templates.build import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH
 
 SIM_SUFFIXES = (".usd", ".usda", ".usdc")
 
@@ -100,9 +101,9 @@ def add_parsers(groups) -> None:
     parser.add_argument("--category", help="skip the classifier")
     parser.add_argument("--body", metavar="PATH", help="SMPL-format body (default: the bundled body)")
     parser.add_argument("--betas", type=float, nargs="+", metavar="B", help="body shape (default: the rest shape)")
-    parser.add_argument("--edge-length", type=float, default=0.02, metavar="L",
-                        help="template edge length in metres (default 0.02, the dataset's; the shipped templates' "
-                             "0.011 costs several times more with --mask)")
+    parser.add_argument("--edge-length", type=float, default=DATASET_EDGE_LENGTH, metavar="L",
+                        help=f"template edge length in metres (default {DATASET_EDGE_LENGTH}, the dataset's; the shipped "
+                             f"templates' {DEFAULT_EDGE_LENGTH} costs several times more with --mask)")
     parser.add_argument("--report", metavar="report.json",
                         help="category, probability, regressed lines, the CRDL's numbers and times per stage")
     parser.add_argument("--simulate", metavar="MOTION", help="then simulate the DART: run darts-sim with this motion")

@@ -25,6 +25,7 @@ import torch
 from darts.camera import IMAGE_SIZE, Camera
 from darts.errors import DartsInputError
 from darts.regress.data import CATEGORY_IDS, camera_batch, initial_lines, padded
+from darts.templates.build import DATASET_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
 
 WEIGHTS = Path(__file__).parent / "weights"
@@ -95,19 +96,14 @@ class Reconstruction:
     report: dict
 
 
-#: Template edge length (m) of a reconstruction: the dataset's. The CRDL's silhouette term costs
-#: about 1 s an iteration on a 2 cm template (a soft rasteriser in torch); at the shipped
-#: templates' 1.1 cm it is several times that.
-EDGE_LENGTH = 0.02
-
-
 def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
-                mask: np.ndarray | None = None, betas=None, edge_length: float = EDGE_LENGTH) -> Reconstruction:
+                mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH) -> Reconstruction:
     """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
     switches the CRDL's silhouette term on and shows the classifier the garment alone."""
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
     from darts.crdl.silhouette import Silhouette
+    from darts.dart.build import make_dart
 
     times, started = {}, time.perf_counter()
     if category is None:
@@ -124,7 +120,7 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     lines = regress_lines(image, camera, category)
     times["regress_s"] = time.perf_counter() - mark
     mark = time.perf_counter()
-    template = _template(category, body, betas, edge_length)
+    template = make_dart(category, body, betas=None if not betas else np.asarray(betas), edge_length=edge_length)
     times["template_s"] = time.perf_counter() - mark
     silhouette = None if mask is None else Silhouette(mask, camera)
     weights = CrdlWeights(silhouette=1.0 if silhouette is not None else 0.0)
@@ -140,9 +136,3 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
               "vertices": len(dart.vertices), "times": {k: round(v, 3) for k, v in times.items()}}
     return Reconstruction(dart, report)
 
-
-def _template(category: str, body, betas, edge_length: float):
-    """The category's DART on ``body`` in the shape ``betas`` (None: the rest shape)."""
-    from darts.dart.build import make_dart
-
-    return make_dart(category, body, betas=None if not betas else np.asarray(betas), edge_length=edge_length)

@@ -116,8 +116,8 @@ def augment(images: torch.Tensor, generator: torch.Generator, shift: int = 0,
         dx, dy = torch.randint(-shift, shift + 1, (2, b), generator=generator) / (x.shape[3] / 2)
         zero = torch.zeros(b)
         affine = torch.stack([torch.stack([mirror / scale, zero, dx], 1), torch.stack([zero, 1 / scale, dy], 1)], 1)
-        grey = (torch.rand(b, generator=generator) < GREY_SHARE)[:, None, None, None]
-        x = torch.where(grey, x.mean(1, keepdim=True).expand_as(x), x)
+        greyed = (torch.rand(b, generator=generator) < GREY_SHARE)[:, None, None, None]
+        x = torch.where(greyed, x.mean(1, keepdim=True).expand_as(x), x)
         grid = functional.affine_grid(affine, list(x.shape), align_corners=False)
         x = functional.grid_sample(x, grid, mode="bilinear", padding_mode="border", align_corners=False)
     return x.clamp(0, 1)

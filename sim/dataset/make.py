@@ -27,7 +27,7 @@ import numpy as np
 
 from darts.geometry.loops import LINE_POINTS
 from darts.jobs import Job
-from sim.dataset.recipe import DRAPE_SECONDS, EDGE_LENGTH, garment_recipe, generator
+from sim.dataset.recipe import DRAPE_SECONDS, garment_recipe, generator
 
 GARMENTS = "garments"
 _RENDER = 4  # the generator purpose of a picture's appearance
@@ -66,14 +66,14 @@ def make_garment(job: Job, folder: Path) -> dict:
     from darts.dart.build import make_dart
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
-    from darts.templates.build import DEFAULT_EASE
+    from darts.templates.build import DATASET_EDGE_LENGTH, DEFAULT_EASE
     from darts.templates.categories import CATEGORIES
     from sim.dataset.drape import drape
 
     recipe = garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]))
     body = _body()
     started = time.perf_counter()
-    template = make_dart(recipe.category, body, betas=np.asarray(recipe.betas), edge_length=EDGE_LENGTH)
+    template = make_dart(recipe.category, body, betas=np.asarray(recipe.betas), edge_length=DATASET_EDGE_LENGTH)
     built = time.perf_counter()
     welded = weld_garment(template)
     targets = edit_targets(recipe.category, welded.vertices, welded.lines, list(recipe.edits))

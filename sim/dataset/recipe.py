@@ -29,7 +29,6 @@ TEST_FRACTION = 0.10
 VAL_FRACTION = 0.10  # of what is not test
 SHAPE_COUNT = 8
 SHAPE_LIMIT = 2.0
-EDGE_LENGTH = 0.02  # metres: dataset garments have 2-4k vertices (224 px images resolve about 7 mm)
 DRAPE_SECONDS = 0.5
 
 _TOP = {"hem": (-0.08, 0.06), "neckline": (0.0, 0.04), "hem_width": (-0.01, 0.05)}
