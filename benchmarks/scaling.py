@@ -29,7 +29,7 @@ from scenes import resolve_motion
 from sim.body_track import build_body_track
 from sim.model import cloth_model
 from sim.settings import SimSettings
-from sim.solver import ClothSolver
+from sim.simulation import Simulation
 
 wp = warp()
 CACHE = Path(__file__).resolve().parent / ".cache"
@@ -74,7 +74,7 @@ def garment(size: str, body) -> Path:
 
 def measure(path: Path, track, frames: int, settings: SimSettings) -> dict:
     model = cloth_model(load_dart(path))
-    solver = ClothSolver(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
+    solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
     solver.step_frame(track.vertices[1])  # compiles the kernels
     with LaunchTimer() as timer:
         start = time.perf_counter()

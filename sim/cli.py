@@ -28,7 +28,8 @@ from exporters.usd import USD_SUFFIXES, UsdAnimationWriter
 from scenes import resolve_garment, resolve_motion
 from sim.body_track import build_body_track
 from sim.run import simulate, summary
-from sim.settings import DEFAULT_SUBSTEPS, SOLVERS, SimSettings
+from sim.settings import SimSettings
+from sim.solvers import solver_class, solver_names
 
 UNSTABLE_EXIT = 3
 
@@ -60,9 +61,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--settle", type=float, default=0.5,
                    help="seconds in which the body blends from its rest pose into the first frame (default 0.5)")
     defaults = SimSettings()
-    p.add_argument("--solver", choices=SOLVERS, default=defaults.solver, help="default xpbd")
+    p.add_argument("--solver", choices=solver_names(), default=defaults.solver, help=f"default {defaults.solver}")
     p.add_argument("--substeps", type=int, default=None,
-                   help="substeps per frame (default: " + ", ".join(f"{k} {v}" for k, v in DEFAULT_SUBSTEPS.items()) + ")")
+                   help="substeps per frame (default: " + ", ".join(f"{k} {solver_class(k).default_substeps}" for k in solver_names()) + ")")
     p.add_argument("--iterations", type=int, default=defaults.iterations, help="XPBD sweeps per substep (default 2)")
     p.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
     p.add_argument("--body", metavar="PATH", help="SMPL/SMPL-H/SMPL-X model file (default: the bundled body)")
@@ -79,6 +80,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--no-ccd", action="store_true",
                    help="push particles inside the body out at the closest body point only, without tracing their "
                         "path back to the face they entered by")
+    p.add_argument("--no-tethers", action="store_true",
+                   help="xpbd: without the long-range tethers that hold the garment's length over many edges at once "
+                        "(it then stretches and waistbands slide unless many more substeps are taken)")
     p.add_argument("--no-crease", action="store_true",
                    help="keep each particle off its closest body face only, not also off a second face within a "
                         "thickness of where that push puts it (creases, where the body overlaps itself)")
@@ -154,11 +158,11 @@ class _PreviewFrames:
 
 
 def settings_from_args(args) -> SimSettings:
-    substeps = args.substeps if args.substeps is not None else DEFAULT_SUBSTEPS[args.solver]
-    settings = SimSettings(fps=args.fps, substeps=substeps, iterations=args.iterations, solver=args.solver,
+    settings = SimSettings(fps=args.fps, substeps=args.substeps, iterations=args.iterations, solver=args.solver,
                            device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed,
                            max_speed=args.max_speed, self_contact=not args.no_self_contact,
-                           continuous_collision=not args.no_ccd, crease_contacts=not args.no_crease)
+                           continuous_collision=not args.no_ccd, crease_contacts=not args.no_crease,
+                           tethers=not args.no_tethers)
     try:
         settings.check()
     except ValueError as exc:
@@ -226,7 +230,7 @@ def execute(args) -> SimOutcome:
                 writer.write_frame({"garment": garment, "body": body})
                 preview(garment, body)
 
-            result = simulate(dart, track, settings, write, progress=not args.quiet)
+            result = simulate(dart, track, settings, write, progress=not args.quiet, winding=args.stats is not None)
             if not result.frames:
                 raise _NothingToKeep(result)
     except _NothingToKeep as nothing:

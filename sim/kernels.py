@@ -48,15 +48,14 @@ def aerodynamic_forces(faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.v
 
 
 @wp.kernel
-def predict(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3),
-            force: wp.array(dtype=wp.vec3), inverse_mass: wp.array(dtype=float), gravity: wp.vec3, dt: float,
-            damping: float):
+def predict(x_in: wp.array(dtype=wp.vec3), v_in: wp.array(dtype=wp.vec3), force: wp.array(dtype=wp.vec3),
+            inverse_mass: wp.array(dtype=float), gravity: wp.vec3, dt: float, damping: float,
+            x_out: wp.array(dtype=wp.vec3), v_out: wp.array(dtype=wp.vec3)):
     """Explicit velocity step then position prediction: v <- d (v + dt (g + f / m)), x <- x + dt v."""
     i = wp.tid()
-    x_start[i] = x[i]
-    vi = damping * (v[i] + dt * (gravity + force[i] * inverse_mass[i]))
-    v[i] = vi
-    x[i] = x[i] + dt * vi
+    vi = damping * (v_in[i] + dt * (gravity + force[i] * inverse_mass[i]))
+    v_out[i] = vi
+    x_out[i] = x_in[i] + dt * vi
 
 
 @wp.kernel
@@ -87,12 +86,23 @@ def inside_body(mesh: wp.uint64, p: wp.vec3, reach: float):
 
 @wp.kernel
 def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3), reach: float,
-                  thickness: float, continuous: int, min_path: float, elapsed: float, window_start: wp.array(dtype=wp.vec3),
+                  thickness: float, continuous: int, min_path: float, elapsed: float, started: float, now: float,
+                  window_start: wp.array(dtype=wp.vec3), skin: float, body_speed: float,
+                  query_time: wp.array(dtype=float), query_offset: wp.array(dtype=wp.vec3),
                   contact_face: wp.array(dtype=wp.int32), contact_uv: wp.array(dtype=wp.vec2),
                   contact_local: wp.array(dtype=wp.vec3), second: int, second_face: wp.array(dtype=wp.int32),
                   second_uv: wp.array(dtype=wp.vec2), second_local: wp.array(dtype=wp.vec3)):
     """Closest body point within ``reach`` of each particle (face, barycentrics) and the outward
     direction there, stored in the face's own frame so that it turns with the face (face -1: none).
+
+    A particle is queried again only once it may have changed (``skin`` > 0; 0 queries every one);
+    one in a crease (with a second contact) always is, since its closest face changes fastest. With a
+    contact, once its offset from its contact point (the same face and barycentrics on the
+    body as it is now) has changed by ``skin`` since its query; without one, once its own path plus
+    what the fastest body vertex (``body_speed``) can travel since its query reaches ``skin`` (the
+    caller adds ``skin`` to ``reach``, so nothing came within the unskinned reach meanwhile). A
+    particle's query keeps when it was made (``query_time``: the start of that substep; -1: never) and that
+    offset (``query_offset``: from the contact point, or the position itself without a contact).
 
     With ``continuous`` set, the particle's path relative to the body since the last search,
     o -> x with o = window_start + v_body * elapsed (the body moving locally like the closest point,
@@ -112,6 +122,16 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
     one plane alone pushes the particle off one face into the other's thickness or inside it."""
     i = wp.tid()
     p = x[i]
+    if skin > 0.0 and query_time[i] >= 0.0 and second_face[i] < 0:
+        moved = float(0.0)
+        if contact_face[i] >= 0:
+            uv0 = contact_uv[i]
+            moved = wp.length(p - wp.mesh_eval_position(mesh, contact_face[i], uv0[0], uv0[1]) - query_offset[i])
+        else:
+            moved = wp.length(p - query_offset[i]) + body_speed * (now - query_time[i])
+        if moved < skin:  # (its path since the last search is shorter than min_path: no crossing)
+            window_start[i] = x_start[i]
+            return
     query = wp.mesh_query_point_sign_normal(mesh, p, reach)
     face = int(-1)
     uv = wp.vec2(0.0)
@@ -164,6 +184,10 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
                     second_local[i] = wp.vec3(wp.dot(out2, f1), wp.dot(out2, f2), wp.dot(out2, m))
     second_face[i] = other
     window_start[i] = x_start[i]
+    query_time[i] = started
+    query_offset[i] = p
+    if face >= 0:
+        query_offset[i] = p - wp.mesh_eval_position(mesh, face, uv[0], uv[1])
 
 
 @wp.kernel
@@ -300,6 +324,26 @@ def solve_distances(offset: int, pairs: wp.array2d(dtype=wp.int32), rest: wp.arr
     x[b] = x[b] - wb * step * n
 
 
+@wp.kernel
+def solve_max_distances(offset: int, pairs: wp.array2d(dtype=wp.int32), limit: wp.array(dtype=float),
+                        inverse_mass: wp.array(dtype=float), x: wp.array(dtype=wp.vec3)):
+    """Unilateral distance limit (a tether) C = |x_a - x_b| - limit <= 0, zero compliance: only a
+    pair farther apart than its limit is moved, back to it, by inverse mass."""
+    c = wp.tid() + offset
+    a, b = pairs[c, 0], pairs[c, 1]
+    d = x[a] - x[b]
+    length = wp.length(d)
+    if length <= limit[c]:
+        return
+    wa, wb = inverse_mass[a], inverse_mass[b]
+    if wa + wb <= 0.0:
+        return
+    step = (limit[c] - length) / (wa + wb)
+    n = d / length
+    x[a] = x[a] + wa * step * n
+    x[b] = x[b] - wb * step * n
+
+
 @wp.func
 def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3):
     """Angle of the hinge (edge i-j; triangles (i, j, k) and (j, i, l)), 0 when flat, and its gradient."""
@@ -362,7 +406,7 @@ def solve_bending(offset: int, hinges: wp.array2d(dtype=wp.int32), rest_angle: w
 
 
 @wp.kernel
-def frame_measures(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, winding: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
                    inside: wp.array(dtype=wp.int32), max_speed: wp.array(dtype=float),
                    finite: wp.array(dtype=wp.int32)):
     """Per frame: particles inside the body (sign by the angle-weighted pseudo-normal at the closest
@@ -381,5 +425,9 @@ def frame_measures(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), v: wp.array(dtyp
         probe = wp.mesh_eval_position(mesh, query.face, query.u, query.v) + 0.003 * wp.mesh_eval_face_normal(mesh, query.face)
         if inside_body(mesh, probe, 10.0):
             wp.atomic_add(inside, 1, 1)
+    if winding != 0:
+        by_winding = wp.mesh_query_point_sign_winding_number(winding_mesh, p, 10.0)
+        if by_winding.result and by_winding.sign < 0.0:
+            wp.atomic_add(inside, 2, 1)
     wp.atomic_max(max_speed, 0, wp.length(vi))
 

@@ -8,11 +8,12 @@
   dihedral angle;
 - seam springs: one per *active* pair of a stiff, loose, repulsive or partial seam, with that
   seam's stiffness (N/m) and rest length (0, or > 0 when repulsive); each end has an anchor, a
-  neighbour off every seam, which says which way the end retreats when coincident ends must part.
+  neighbour off every seam, which says which way the end retreats when coincident ends must part;
+- loops: each feature line as a loop of particles (for ``sim.tethers``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -39,6 +40,7 @@ class ClothModel:
     spring_anchors: np.ndarray  # [S,2] an off-seam neighbour of each end (-1: none), for repulsion
     seam_names: list[str]
     material: dict
+    loops: dict = field(default_factory=dict)  # feature line name -> its closed loop of particle indices
 
     def springs_and_edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every elastic pair: the edges (the material's stretch stiffness) then the sprung seam
@@ -171,4 +173,5 @@ def cloth_model(dart: Dart) -> ClothModel:
         spring_rest=np.array([dart.seams[s].rest_length for s in seam_of]),
         spring_stiffness=np.array([dart.seams[s].stiffness for s in seam_of]),
         spring_seam=seam_of.astype(np.int64), seam_names=dart.seam_names, material=dict(dart.material),
+        loops={name: particle[np.asarray(loop, np.int64)] for name, loop in dart.lines.items()},
     )

@@ -15,8 +15,9 @@ import numpy as np
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
 from sim.model import cloth_model
+from sim.quality import edge_strain, strain_summary, waist_height
 from sim.settings import SimSettings
-from sim.solver import ClothSolver
+from sim.simulation import Simulation
 
 
 @dataclass
@@ -47,14 +48,15 @@ def seam_gap_stats(dart: Dart, vertices: np.ndarray) -> dict[str, dict[str, floa
 
 
 def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
-             sink: Callable[[np.ndarray, np.ndarray], None] | None = None, progress: bool = False) -> RunResult:
+             sink: Callable[[np.ndarray, np.ndarray], None] | None = None, progress: bool = False,
+             winding: bool = False) -> RunResult:
     """Drape ``dart`` from its rest pose through ``track``; ``sink(garment [V,3], body [B,3])`` gets
-    every recorded frame. Stops early (``stable`` False) on a non-finite value or a particle faster
+    every recorded frame; ``winding``: also measure penetration by the body's winding number. Stops early (``stable`` False) on a non-finite value or a particle faster
     than ``settings.max_speed``."""
     from tqdm import tqdm
 
     model = cloth_model(dart)
-    solver = ClothSolver(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
+    solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
     result = RunResult(particles=len(model.rest))
     total = len(track.vertices)
     start = time.perf_counter()
@@ -64,7 +66,7 @@ def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
             solver.step_frame(track.vertices[k])
             result.simulated_frames += 1
             bar.update(1)
-        measure = solver.measure()
+        measure = solver.measure(winding=winding and k >= track.settle_frames)
         phase = "settle" if k < track.settle_frames else "frame"
         index = k if k < track.settle_frames else k - track.settle_frames
         if not measure.finite or measure.max_speed > settings.max_speed:
@@ -75,9 +77,16 @@ def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
             break
         if k < track.settle_frames:
             continue
-        vertices = solver.positions()[model.particle_of_vertex]
-        result.frames.append({"penetration": measure.penetration,
+        particles = solver.positions()
+        vertices = particles[model.particle_of_vertex]
+        waist = waist_height(dart, vertices, None if track.pelvis is None else track.pelvis[k])
+        if waist is not None:
+            settled = waist if not result.frames else result.frames[0]["waist_height"]
+        result.frames.append({"strain": strain_summary(edge_strain(model, particles)),
+                              "waist_height": waist, "waist_slide": None if waist is None else settled - waist,
+                              "penetration": measure.penetration,
                               "penetration_in_body_overlap": measure.penetration_in_body_overlap,
+                              "penetration_winding": measure.penetration_winding,
                               "max_speed": measure.max_speed, "self_intersections": measure.self_intersections,
                               "seam_gap": seam_gap_stats(dart, vertices)})
         if sink is not None:
@@ -100,8 +109,15 @@ def summary(result: RunResult, settings: SimSettings, vertices: int) -> dict:
         "max_penetration": max((f["penetration"] for f in frames), default=0.0),
         "max_penetration_outside_body_overlap": max((f["penetration"] - f["penetration_in_body_overlap"] for f in frames),
                                                     default=0.0),
+        "max_penetration_winding": max((f["penetration_winding"] for f in frames), default=0.0)
+        if frames and frames[0]["penetration_winding"] is not None else None,
         "max_speed": max((f["max_speed"] for f in frames), default=0.0),
         "max_self_intersections": max((f["self_intersections"] for f in frames), default=0),
+        "strain_mean": float(np.mean([f["strain"]["mean"] for f in frames])) if frames else 0.0,
+        "strain_p99": max((f["strain"]["p99"] for f in frames), default=0.0),
+        "strain_max": max((f["strain"]["max"] for f in frames), default=0.0),
+        "max_waist_slide": max((f["waist_slide"] for f in frames), default=None)
+        if frames and frames[0]["waist_slide"] is not None else None,
         "self_contact": settings.self_contact,
         "max_seam_gap": {s: max(f["seam_gap"][s]["max"] for f in frames) for s in seams},
         "frames": frames,

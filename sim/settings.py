@@ -5,10 +5,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-SOLVERS = ("xpbd", "mass-spring")
-#: Substeps per frame at 30 fps: XPBD needs many small steps to keep the garment from stretching
-#: under its own weight; the implicit mass-spring step converges globally with fewer.
-DEFAULT_SUBSTEPS = {"xpbd": 40, "mass-spring": 10}
+from sim.solvers import solver_class, solver_names
+
+DEFAULT_SOLVER = "xpbd"
+#: A particle's path relative to the body longer than this (m) since its last search is traced for
+#: a crossing: half the thickness of the thinnest body part (a finger, about 2 cm), so a shorter path
+#: cannot have reached past a part's middle and the closest body point is the right way out. It also
+#: bounds ``contact_skin``: a particle that moved less than this need not be searched again.
+CCD_MIN_PATH = 0.01
 
 
 @dataclass
@@ -16,9 +20,9 @@ class SimSettings:
     """How the solver steps; material-dependent values (thickness, friction) come from the DART."""
 
     fps: float = 30.0
-    substeps: int = DEFAULT_SUBSTEPS["xpbd"]  # per frame
+    substeps: int | None = None  # per frame; None: the solver's own default (``Solver.default_substeps``)
     iterations: int = 2  # XPBD constraint sweeps per substep
-    solver: str = "xpbd"
+    solver: str = DEFAULT_SOLVER
     device: str = "cpu"
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)  # m/s^2
     wind: tuple[float, float, float] = (0.0, 0.0, 0.0)  # m/s
@@ -29,6 +33,7 @@ class SimSettings:
     ground: bool = True  # the plane z = 0
     contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
     contact_interval: int = 1  # substeps between the body's closest-point searches
+    contact_skin: float = 0.005  # m a particle moves (relative to its contact) before it is searched again; 0: always
     self_contact_interval: int = 2  # substeps between the garment's self-contact searches
     max_body_speed: float = 5.0  # m/s the search reach allows for at least (more when the body is faster)
     max_speed: float = 50.0  # m/s; faster means the run has blown up
@@ -36,12 +41,19 @@ class SimSettings:
     self_contact: bool = True  # the garment collides with itself
     continuous_collision: bool = True  # a particle whose path entered the body goes back out that face
     crease_contacts: bool = True  # a particle kept off a second body face within a thickness of its push
+    tethers: bool = True  # XPBD: long-range tethers (sim.tethers) hold stretch over many edges at once
     seed: int = 0
+
+    def __post_init__(self):
+        if self.substeps is None and self.solver in solver_names():
+            self.substeps = solver_class(self.solver).default_substeps
 
     def check(self) -> None:
         """Raise ValueError naming the first setting out of range."""
+        if self.solver not in solver_names():
+            raise ValueError(f"unknown solver '{self.solver}' (one of {', '.join(solver_names())})")
         finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
-                                               self.damping, self.contact_reach, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
+                                               self.damping, self.contact_reach, self.contact_skin, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
         if not finite:
             raise ValueError("settings must be finite numbers")
         rules = [
@@ -51,11 +63,11 @@ class SimSettings:
             (self.contact_interval >= 1, f"contact interval must be >= 1, got {self.contact_interval}"),
             (self.self_contact_interval >= 1, f"self-contact interval must be >= 1, got {self.self_contact_interval}"),
             (self.cg_iterations >= 1, f"cg iterations must be >= 1, got {self.cg_iterations}"),
-            (self.solver in SOLVERS, f"unknown solver '{self.solver}' (one of {', '.join(SOLVERS)})"),
             (0 <= self.gust <= 1, f"gust must be in [0, 1], got {self.gust}"),
             (self.air_density >= 0 and self.drag_coefficient >= 0, "air density and drag must be >= 0"),
             (self.damping >= 0, f"damping must be >= 0, got {self.damping}"),
             (self.contact_reach > 0 and self.max_speed > 0, "contact reach and max speed must be > 0"),
+            (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),
         ]
         for ok, message in rules:
             if not ok:

@@ -9,7 +9,7 @@ import trimesh
 
 from sim.model import cloth_model
 from sim.settings import SimSettings
-from sim.solver import ClothSolver
+from sim.simulation import Simulation
 from tests.helpers import sheet_dart
 
 SPEED = 10.0  # m/s, downwards: 3.3 cm a substep at 30 fps x 10 substeps
@@ -36,7 +36,7 @@ def _throw_at_plate(height: float, continuous: bool, frames: int = 6) -> tuple[n
     model = cloth_model(sheet_dart(*_square_sheet(11, 0.01, height)))
     settings = SimSettings(substeps=10, iterations=4, ground=False, air_density=0.0, self_contact=False,
                            continuous_collision=continuous)
-    solver = ClothSolver(model, model.rest, np.asarray(plate.faces), np.asarray(plate.vertices), settings)
+    solver = Simulation(model, model.rest, np.asarray(plate.faces), np.asarray(plate.vertices), settings)
     solver.v.assign(np.tile(np.float32([0.0, 0.0, -SPEED]), (solver.count, 1)))
     for _ in range(frames):
         solver.step_frame(np.asarray(plate.vertices))
@@ -88,7 +88,7 @@ def _press_into_groove(crease: bool) -> np.ndarray:
     model = cloth_model(sheet_dart(patch, np.array([[0, 1, 2]])))
     settings = SimSettings(substeps=1, iterations=1, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
                            self_contact=False, crease_contacts=crease)
-    solver = ClothSolver(model, model.rest, np.asarray(body.faces), np.asarray(body.vertices), settings)
+    solver = Simulation(model, model.rest, np.asarray(body.faces), np.asarray(body.vertices), settings)
     assert np.all(model.rest @ normals.T < 0.99 * solver.thickness)  # the patch starts too close to both
     solver.step_frame(np.asarray(body.vertices))
     return solver.positions() @ normals.T / solver.thickness
@@ -103,3 +103,38 @@ def test_without_crease_contacts_it_stays_too_close_to_one_face():
     above can fail)."""
     distances = _press_into_groove(crease=False)
     assert np.all(distances.min(axis=1) < 0.5)
+
+
+def _ride_rising_plate(skin: float, frames: int = 15) -> tuple[np.ndarray, float, list[int]]:
+    """A sheet resting on a plate that rises at 0.3 m/s: its particles' heights above the plate's top
+    after ``frames`` frames (material thicknesses), and how many particles each body search of the
+    last frame queried."""
+    plate = trimesh.creation.box(extents=(0.4, 0.4, PLATE), transform=trimesh.transformations.translation_matrix(
+        (0.0, 0.0, -PLATE / 2)))
+    model = cloth_model(sheet_dart(*_square_sheet(11, 0.01, 0.0021)))
+    settings = SimSettings(substeps=10, iterations=2, ground=False, air_density=0.0, self_contact=False,
+                           contact_skin=skin)
+    solver = Simulation(model, model.rest, np.asarray(plate.faces), np.asarray(plate.vertices), settings)
+    queried = []
+    for frame in range(1, frames + 1):
+        lift = np.array([0.0, 0.0, 0.3 * frame / 30.0])
+        if frame == frames:  # count the queries of the last frame, substep by substep
+            collider, original = solver.collider, solver.collider.update
+
+            def counting_update(x, x_start, substep, dt):
+                original(x, x_start, substep, dt)
+                queried.append(int(np.sum(collider.query_time.numpy() == collider.window_time)))
+
+            collider.update = counting_update
+        solver.step_frame(np.asarray(plate.vertices) + lift)
+    return (solver.positions()[:, 2] - 0.3 * frames / 30.0) / solver.thickness, solver.thickness, queried
+
+
+def test_a_skin_skips_the_search_of_particles_riding_the_body_and_keeps_them_on_it():
+    """With a 5 mm skin, a sheet carried by the body is searched only now and then, and still rides
+    a thickness above it, as it does when every particle is searched every substep."""
+    height, _, queried = _ride_rising_plate(skin=0.005)
+    every, _, all_queried = _ride_rising_plate(skin=0.0)
+    assert np.all(np.abs(height - 1.0) < 0.05) and np.all(np.abs(every - 1.0) < 0.05)
+    assert all(q == 121 for q in all_queried)
+    assert sum(queried) < 0.2 * sum(all_queried)

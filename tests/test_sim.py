@@ -15,7 +15,7 @@ from sim.body_track import build_body_track
 from sim.model import cloth_model, dihedral_angles
 from sim.run import simulate
 from sim.settings import SimSettings
-from sim.solver import ClothSolver
+from sim.simulation import Simulation
 
 wp = warp()
 MM = 1e-3
@@ -59,7 +59,7 @@ def test_free_fall_accelerates_at_g(body, solver):
     model = cloth_model(dart)
     settings = SimSettings(solver=solver, air_density=0.0, damping=0.0, ground=False)
     far_body = np.asarray(body.v_template, np.float64) + [0.0, 0.0, 100.0]
-    solver_ = ClothSolver(model, model.rest, body.faces, far_body, settings)
+    solver_ = Simulation(model, model.rest, body.faces, far_body, settings)
     frames = 15
     for _ in range(frames):
         solver_.step_frame(far_body)
@@ -169,7 +169,7 @@ def test_a_blow_up_stops_the_run_and_keeps_the_frames_before(body):
 def test_non_finite_state_is_reported(body):
     dart = load_dart(GARMENTS_DIR / "short-skirt.npz")
     model = cloth_model(dart)
-    solver = ClothSolver(model, model.rest, body.faces, np.asarray(body.v_template, np.float64), SimSettings())
+    solver = Simulation(model, model.rest, body.faces, np.asarray(body.v_template, np.float64), SimSettings())
     x = solver.x.numpy()
     x[7] = np.nan
     solver.x.assign(x)
@@ -177,7 +177,13 @@ def test_non_finite_state_is_reported(body):
     assert solver.diagnose().startswith("particle 7 non-finite, worst constraint on it: edge 7-")
 
 
-@pytest.mark.parametrize("motion", shipped_motions())
+#: Known regression of the tethered defaults (issue 20, open): the inextensible skirt cannot give
+#: where the squatting body bends under it, and 1.7 % of its particles end inside the body.
+SQUAT_PENETRATION = pytest.mark.xfail(strict=True, reason="tethered defaults: 1.7 % penetration in the squat")
+
+
+@pytest.mark.parametrize("motion", [pytest.param(m, marks=SQUAT_PENETRATION) if m == "squat" else m
+                                    for m in shipped_motions()])
 def test_every_shipped_motion_simulates_without_nan(body, motion):
     track = build_body_track(body, load_motion(MOTIONS_DIR / f"{motion}.npz"), 30.0, 0.5)
     dart = load_dart(GARMENTS_DIR / "short-skirt.npz")

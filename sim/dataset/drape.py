@@ -15,7 +15,7 @@ from darts.body.model import BodyModel
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
 from sim.run import simulate
-from sim.settings import DEFAULT_SUBSTEPS, SimSettings
+from sim.settings import SimSettings
 
 #: The solver that holds each family today (docs/simulation.md, "Known limits"): XPBD lets
 #: waistbands creep down the hips, the implicit mass-spring solver holds them.
@@ -44,7 +44,7 @@ def drape(dart: Dart, body: BodyModel, family: str, seconds: float = 0.5, fps: f
     """Let ``dart`` (made for ``body`` in the DART's shape) settle under gravity for ``seconds``."""
     solver = DRAPE_SOLVER[family]
     frames = max(1, int(round(seconds * fps)))
-    settings = SimSettings(fps=fps, solver=solver, substeps=DEFAULT_SUBSTEPS[solver], gravity=(0.0, -9.81, 0.0),
+    settings = SimSettings(fps=fps, solver=solver, gravity=(0.0, -9.81, 0.0),
                            ground=False)
     last = {}
 

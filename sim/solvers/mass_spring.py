@@ -1,4 +1,4 @@
-"""Semi-implicit mass-spring integrator (Baraff & Witkin 1998): one linearised backward-Euler step.
+"""Semi-implicit mass-spring solver (Baraff & Witkin 1998): one linearised backward-Euler step.
 
 Per substep solve (M + h^2 H) dv = h (f + h g M) - h^2 H v with H the stiffness matrix (springs:
 k [n n^T + max(0, 1 - L/l)(I - n n^T)], kept positive semi-definite; hinges: kappa g g^T), by a
@@ -12,7 +12,7 @@ import numpy as np
 
 from darts.geometry.warp_runtime import warp
 from sim import kernels
-from sim.solver import ClothSolver, hinge_stiffness
+from sim.solvers.base import Solver, hinge_stiffness
 
 wp = warp()
 
@@ -158,23 +158,25 @@ def cg_direction(z: wp.array(dtype=wp.vec3), rz: wp.array(dtype=float), rz_next:
 
 
 @wp.kernel
-def advance(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), dv: wp.array(dtype=wp.vec3),
-            x_start: wp.array(dtype=wp.vec3), dt: float, damping: float):
-    """v <- d (v + dv); x <- x + h v (x_start keeps the old x)."""
+def advance(x_in: wp.array(dtype=wp.vec3), v_in: wp.array(dtype=wp.vec3), dv: wp.array(dtype=wp.vec3), dt: float,
+            damping: float, x_out: wp.array(dtype=wp.vec3), v_out: wp.array(dtype=wp.vec3)):
+    """v <- d (v + dv); x <- x + h v."""
     i = wp.tid()
-    x_start[i] = x[i]
-    vi = damping * (v[i] + dv[i])
-    v[i] = vi
-    x[i] = x[i] + dt * vi
+    vi = damping * (v_in[i] + dv[i])
+    v_out[i] = vi
+    x_out[i] = x_in[i] + dt * vi
 
 
-class MassSpringIntegrator:
+class MassSpringSolver(Solver):
     """``--solver mass-spring``: springs on every edge (the material's stretch stiffness) and seam
     pair, hinges with kappa from ``hinge_stiffness``, integrated semi-implicitly."""
 
-    def __init__(self, solver: ClothSolver):
-        model, device = solver.model, solver.device
-        self.solver = solver
+    name = "mass-spring"
+    default_substeps = 10
+
+    def __init__(self, model, state, settings):
+        super().__init__(model, state, settings)
+        device = self.device
         pairs, rest, stiffness = model.springs_and_edges()
         self.pairs = wp.array(pairs, dtype=wp.int32, device=device)
         self.rest = wp.array(rest.astype(np.float32), device=device)
@@ -184,50 +186,49 @@ class MassSpringIntegrator:
         self.kappa = wp.array(hinge_stiffness(model).astype(np.float32), device=device)
         self.blocks = wp.zeros(len(pairs), dtype=wp.mat33, device=device)
         self.gradients = wp.zeros((len(model.hinges), 4), dtype=wp.vec3, device=device)
-        n = solver.count
+        n = self.count
         self.diagonal = wp.zeros(n, dtype=float, device=device)
         self.dv, self.residual, self.z, self.direction, self.product = (
             wp.zeros(n, dtype=wp.vec3, device=device) for _ in range(5))
-        self.scalars = wp.zeros(2 * solver.settings.cg_iterations + 1, dtype=float, device=device)  # r.z, p.Ap, ...
-        self.damping = float(np.exp(-solver.settings.damping / (solver.settings.fps * solver.settings.substeps)))
+        self.scalars = wp.zeros(2 * settings.cg_iterations + 1, dtype=float, device=device)  # r.z, p.Ap, ...
 
     def _stiffness_product(self, p, scale: float, mass_scale: float) -> None:
         """product = mass_scale M p + scale H p."""
-        s = self.solver
-        wp.launch(mass_times, dim=s.count, inputs=[s.mass, mass_scale, p, self.product], device=s.device)
+        wp.launch(mass_times, dim=self.count, inputs=[self.mass, mass_scale, p, self.product], device=self.device)
         wp.launch(add_spring_product, dim=self.pairs.shape[0], inputs=[self.pairs, self.blocks, scale, p, self.product],
-                  device=s.device)
+                  device=self.device)
         wp.launch(add_hinge_product, dim=self.hinges.shape[0],
-                  inputs=[self.hinges, self.gradients, self.kappa, scale, p, self.product], device=s.device)
+                  inputs=[self.hinges, self.gradients, self.kappa, scale, p, self.product], device=self.device)
 
-    def substep(self, dt: float, time: float, index: int) -> None:
-        s, device, h2 = self.solver, self.solver.device, dt * dt
-        s.external_forces(time)
+    def step(self, state_in, state_out, collider, dt, time, substep):
+        device, h2 = self.device, dt * dt
+        self.external_forces(state_in, time)
         self.diagonal.zero_()
         self.scalars.zero_()
         wp.launch(spring_forces, dim=self.pairs.shape[0],
-                  inputs=[self.pairs, self.rest, self.stiffness, s.x, s.force, self.blocks, self.diagonal], device=device)
-        wp.launch(hinge_forces, dim=self.hinges.shape[0],
-                  inputs=[self.hinges, self.rest_angle, self.kappa, s.x, s.force, self.gradients, self.diagonal],
+                  inputs=[self.pairs, self.rest, self.stiffness, state_in.x, self.force, self.blocks, self.diagonal],
                   device=device)
-        wp.launch(gravity_guess, dim=s.count, inputs=[s.v, wp.vec3(*s.settings.gravity), dt, self.dv, self.z],
+        wp.launch(hinge_forces, dim=self.hinges.shape[0],
+                  inputs=[self.hinges, self.rest_angle, self.kappa, state_in.x, self.force, self.gradients,
+                          self.diagonal], device=device)
+        wp.launch(gravity_guess, dim=self.count, inputs=[state_in.v, wp.vec3(*self.settings.gravity), dt, self.dv, self.z],
                   device=device)
         self._stiffness_product(self.z, h2, 0.0)  # h^2 H (v + dv0)
         rz = self.scalars[0:1]
-        wp.launch(start_solve, dim=s.count,
-                  inputs=[s.force, dt, self.product, s.mass, self.diagonal, h2, self.residual, self.z, self.direction, rz],
-                  device=device)
-        for k in range(s.settings.cg_iterations):
+        wp.launch(start_solve, dim=self.count,
+                  inputs=[self.force, dt, self.product, self.mass, self.diagonal, h2, self.residual, self.z,
+                          self.direction, rz], device=device)
+        for k in range(self.settings.cg_iterations):
             p_ap, rz_next = self.scalars[2 * k + 1:2 * k + 2], self.scalars[2 * k + 2:2 * k + 3]
             self._stiffness_product(self.direction, h2, 1.0)
-            wp.launch(dot_into, dim=s.count, inputs=[self.direction, self.product, p_ap], device=device)
-            wp.launch(cg_update, dim=s.count,
-                      inputs=[self.direction, self.product, rz, p_ap, s.mass, self.diagonal, h2, self.dv,
+            wp.launch(dot_into, dim=self.count, inputs=[self.direction, self.product, p_ap], device=device)
+            wp.launch(cg_update, dim=self.count,
+                      inputs=[self.direction, self.product, rz, p_ap, self.mass, self.diagonal, h2, self.dv,
                               self.residual, self.z, rz_next], device=device)
-            wp.launch(cg_direction, dim=s.count, inputs=[self.z, rz, rz_next, self.direction], device=device)
+            wp.launch(cg_direction, dim=self.count, inputs=[self.z, rz, rz_next, self.direction], device=device)
             rz = rz_next
-        wp.launch(advance, dim=s.count, inputs=[s.x, s.v, self.dv, s.x_start, dt, self.damping], device=device)
-        s.update_contacts(index, dt)
-        s.resolve_contacts()
-        s.apply_friction(dt)
-        wp.launch(kernels.velocities_from_positions, dim=s.count, inputs=[s.x, s.x_start, dt, s.v], device=device)
+        wp.launch(advance, dim=self.count, inputs=[state_in.x, state_in.v, self.dv, dt, self.damping, state_out.x,
+                                                   state_out.v], device=device)
+        self.find_contacts(state_in, state_out, collider, dt, substep)
+        self.resolve_contacts(state_out, collider)
+        self.finish(state_in, state_out, collider, dt)

@@ -1,0 +1,127 @@
+"""Speed and quality of solver settings on one scene, against a baseline run in the same process.
+
+    python benchmarks/solver_speed.py [--garment short-sleeve-top] [--motion walk] [--frames 30]
+                                      [--out docs/data/benchmark_solver.json]
+
+Scene: a shipped garment (default the 6k short-sleeve top) on the default body, a shipped motion at
+30 fps after the 0.5 s settle, world frame Z up, metres. Each configuration steps the same frames;
+only ``Simulation.step_frame`` is timed (after one untimed frame that compiles the kernels), on one
+core (Warp's CPU backend runs a launch on one thread). Quality over the recorded frames, measured
+the same way for every configuration: edge strain (``sim.quality``: mean over edges and frames, the
+largest 99th percentile and max of a frame), penetration by the closest point's sign and by the
+body's winding number (largest fraction of particles inside over the frames), and the largest gap
+of a stiff seam (m). The first configuration is the baseline (the default before long-range tethers and
+the contact skin: XPBD 40 substeps x 2 sweeps, every particle searched every substep); ``ratio`` is
+each one's speed over it. The time of building the tethers (once per run, a few seconds) is not in
+the frame rate. ``--profile`` adds where the time of the last configuration goes (cProfile, cumulative
+seconds per frame of the solver's pieces).
+"""
+from __future__ import annotations
+
+import argparse
+import cProfile
+import json
+import pstats
+import time
+from pathlib import Path
+
+import numpy as np
+
+from darts.body.io import load_body
+from darts.dart.io import load_dart
+from darts.motion.amass import load_motion
+from scenes import resolve_garment, resolve_motion
+from sim.body_track import build_body_track
+from sim.model import cloth_model
+from sim.quality import edge_strain
+from sim.settings import SimSettings
+from sim.simulation import Simulation
+
+CONFIGURATIONS = {
+    "xpbd 40x2 (the previous default)": dict(solver="xpbd", substeps=40, iterations=2, contact_skin=0.0, tethers=False),
+    "xpbd 20x2, no tethers, no skin": dict(solver="xpbd", substeps=20, iterations=2, contact_skin=0.0, tethers=False),
+    "xpbd 20x2, tethers, no skin": dict(solver="xpbd", substeps=20, iterations=2, contact_skin=0.0),
+    "default (xpbd 20x2, tethers, 5 mm skin)": {},
+}
+#: Functions whose cumulative time is the profile's rows (qualified name suffixes).
+PROFILE_ROWS = {
+    "body contact search and tracking": "collider.py:update",
+    "self-contact search": "self_contact.py:search",
+    "self-contact projection": "self_contact.py:resolve",
+    "body contact projection": "collider.py:resolve",
+    "friction": "collider.py:friction",
+    "constraint sweeps (tethers, stretch, seams, bending)": "xpbd.py:launch",
+    "whole frame": "simulation.py:step_frame",
+}
+
+
+def run(dart, model, track, settings: SimSettings, frames: int, profile: bool = False) -> dict:
+    """Step ``frames`` recorded frames (after the settle) and measure speed and quality."""
+    sim = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
+    sim.step_frame(track.vertices[1])  # compiles the kernels; not timed
+    stiff = np.isin(dart.pair_seam, [i for i, s in enumerate(dart.seams) if s.regime == "stiff"])
+    wall, strains, p99, worst, pen, pen_w, gap, stable = 0.0, [], 0.0, 0.0, 0.0, 0.0, 0.0, True
+    profiler = cProfile.Profile() if profile else None
+    last = min(len(track.vertices), track.settle_frames + frames + 1)
+    for k in range(2, last):
+        start = time.perf_counter()
+        if profiler:
+            profiler.enable()
+        sim.step_frame(track.vertices[k])
+        if profiler:
+            profiler.disable()
+        wall += time.perf_counter() - start
+        if k < track.settle_frames:
+            continue
+        m = sim.measure(winding=True)
+        if not m.finite or m.max_speed > settings.max_speed:
+            stable = False
+            break
+        x = sim.positions()
+        s = edge_strain(model, x)
+        strains.append(s.mean())
+        p99, worst = max(p99, float(np.percentile(s, 99))), max(worst, float(s.max()))
+        pen, pen_w = max(pen, m.penetration), max(pen_w, m.penetration_winding)
+        v = x[model.particle_of_vertex]
+        if stiff.any():
+            gap = max(gap, float(np.linalg.norm(v[dart.pairs[stiff, 0]] - v[dart.pairs[stiff, 1]], axis=1).max()))
+    row = {"settings": {k: getattr(settings, k) for k in ("solver", "substeps", "iterations", "contact_skin", "tethers")},
+           "sim_fps": (last - 2) / wall, "stable": stable, "strain_mean": float(np.mean(strains)) if strains else None,
+           "strain_p99": p99, "strain_max": worst, "max_penetration": pen, "max_penetration_winding": pen_w,
+           "max_stiff_seam_gap": gap}
+    if profiler:
+        stats = pstats.Stats(profiler).stats
+        row["profile_ms_per_frame"] = {
+            label: 1e3 * sum(v[3] for key, v in stats.items() if f"{Path(key[0]).name}:{key[2]}".endswith(suffix)) / (last - 2)
+            for label, suffix in PROFILE_ROWS.items()}
+    return row
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--garment", default="short-sleeve-top")
+    parser.add_argument("--motion", default="walk")
+    parser.add_argument("--frames", type=int, default=30, help="recorded frames after the settle (default 30)")
+    parser.add_argument("--profile", action="store_true", help="profile the last configuration")
+    parser.add_argument("--out", type=Path, default=Path("docs/data/benchmark_solver.json"))
+    args = parser.parse_args()
+    dart = load_dart(resolve_garment(args.garment))
+    model = cloth_model(dart)
+    track = build_body_track(load_body(), load_motion(resolve_motion(args.motion)), 30.0, 0.5)
+    results = {}
+    names = list(CONFIGURATIONS)
+    for name in names:
+        results[name] = run(dart, model, track, SimSettings(**CONFIGURATIONS[name]), args.frames,
+                            profile=args.profile and name == names[-1])
+        print(name, json.dumps(results[name]), flush=True)
+    base = results[names[0]]["sim_fps"]
+    for row in results.values():
+        row["ratio"] = row["sim_fps"] / base
+    document = {"scene": {"garment": args.garment, "motion": args.motion, "frames": args.frames,
+                          "particles": len(model.rest)}, "results": results}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(document, indent=1))
+
+
+if __name__ == "__main__":
+    main()

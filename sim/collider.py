@@ -1,0 +1,129 @@
+"""The body as a collider: a triangle mesh that moves frame to frame, and each particle's contact with it.
+
+World frame (Z up, metres, seconds). Per frame the body moves linearly from its previous vertices
+to the next ones; every substep places it. Every ``contact_interval`` substeps its BVH is refit and
+each particle's closest body point searched (with the continuous test and crease contacts of
+``kernels.find_contacts``); in between, each contact plane follows its body face
+(``kernels.track_contacts``). ``resolve`` pushes particles a thickness outside those planes and above
+the ground; ``friction`` turns the pushes of a substep into Coulomb friction.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from darts.geometry.warp_runtime import warp
+from sim import kernels
+from sim.settings import CCD_MIN_PATH, SimSettings
+from sim.state import int_array, vec3_array
+
+wp = warp()
+
+class BodyContacts:
+    """One body contact per particle (face -1: none): where it was found (face, barycentrics, the
+    outward direction in the face's frame) and its plane now (point, normal, surface velocity)."""
+
+    def __init__(self, count: int, device: str):
+        self.face = wp.full(count, -1, dtype=wp.int32, device=device)
+        self.uv = wp.zeros(count, dtype=wp.vec2, device=device)
+        self.local = wp.zeros(count, dtype=wp.vec3, device=device)
+        self.point = wp.zeros(count, dtype=wp.vec3, device=device)
+        self.normal = wp.zeros(count, dtype=wp.vec3, device=device)
+        self.velocity = wp.zeros(count, dtype=wp.vec3, device=device)
+
+
+class BodyCollider:
+    """The moving body mesh (vertices [V,3], faces [F,3]) and its contacts with ``count`` particles
+    of a cloth ``thickness`` (m) thick with Coulomb ``friction``."""
+
+    def __init__(self, body_faces: np.ndarray, body_vertices: np.ndarray, count: int, thickness: float,
+                 friction: float, settings: SimSettings):
+        device = self.device = settings.device
+        self.settings, self.count = settings, count
+        self.thickness, self.friction_coefficient = float(thickness), float(friction)
+        self.start = vec3_array(body_vertices, device)
+        self.end = vec3_array(body_vertices, device)
+        self.points = vec3_array(body_vertices, device)
+        self.velocities = wp.zeros_like(self.points)
+        self.mesh = wp.Mesh(points=self.points, velocities=self.velocities,
+                            indices=int_array(np.asarray(body_faces).reshape(-1), device))
+        self.contact = BodyContacts(count, device)
+        # A second body face kept off where the first contact would put the particle within a
+        # thickness of another (a crease, or where the posed body overlaps itself).
+        self.second = BodyContacts(count, device)
+        self.window_start = None  # positions at the start of the last search's substep
+        self.window_time = 0.0  # and when that substep started (s)
+        self.query_time = wp.full(count, -1.0, dtype=float, device=device)  # each particle's last query (s)
+        self.query_offset = wp.zeros(count, dtype=wp.vec3, device=device)
+        self.body_push = wp.zeros(count, dtype=float, device=device)
+        self.ground_push = wp.zeros(count, dtype=float, device=device)
+        self.speed = settings.max_body_speed
+        self.time = 0.0
+
+    def begin_frame(self, body_next: np.ndarray) -> None:
+        """The body will move from where it is now to ``body_next`` [V,3] during the next frame; the
+        search reach covers what its fastest vertex travels between searches."""
+        self.start, self.end = self.end, self.start
+        self.end.assign(np.ascontiguousarray(body_next, np.float32))
+        moved = np.linalg.norm(np.asarray(body_next, np.float32) - self.start.numpy(), axis=1).max()
+        self.speed = max(float(moved) * self.settings.fps, self.settings.max_body_speed)
+
+    def end_frame(self) -> None:
+        """Place the body at the end of the frame just stepped."""
+        self.time += 1.0 / self.settings.fps
+        self.place(1.0)
+
+    def place(self, weight: float, refit: bool = True) -> None:
+        """Body at ``weight`` of the way through the current frame (its BVH refit if ``refit``)."""
+        wp.launch(kernels.body_frame, dim=len(self.points),
+                  inputs=[self.start, self.end, weight, self.settings.fps, self.points, self.velocities],
+                  device=self.device)
+        if refit:
+            self.mesh.refit()
+
+    def update(self, x, x_start, substep: int, dt: float) -> None:
+        """Place the body at the end of substep ``substep`` (of the current frame); every
+        ``contact_interval`` substeps search each particle's closest body point within reach (the
+        thickness, ``contact_reach`` and what the fastest body vertex travels until the next search)
+        with the continuous test from ``x_start`` (positions at the substep's start) and crease
+        contacts; then put every contact plane where its body face is now."""
+        settings = self.settings
+        if self.window_start is None:
+            self.window_start = wp.clone(x_start)
+        interval = settings.contact_interval
+        search = substep % interval == 0
+        self.place((substep + 1) / settings.substeps, refit=search)
+        if search:
+            reach = self.thickness + settings.contact_reach + settings.contact_skin + interval * dt * self.speed
+            started = self.time + substep * dt
+            wp.launch(kernels.find_contacts, dim=self.count,
+                      inputs=[self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
+                              CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start, settings.contact_skin, self.speed,
+                              self.query_time, self.query_offset, self.contact.face,
+                              self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
+                              self.second.uv, self.second.local],
+                      device=self.device)
+            self.window_time = started
+        for c in (self.contact, self.second):
+            wp.launch(kernels.track_contacts, dim=self.count,
+                      inputs=[self.mesh.id, c.face, c.uv, c.local, c.point, c.normal, c.velocity], device=self.device)
+
+    def resolve(self, x) -> None:
+        """Push particles ``thickness`` outside their contact planes (both, in a crease) and above the
+        ground, which has the last word; the pushes add up for ``friction``."""
+        c, s = self.contact, self.second
+        wp.launch(kernels.resolve_contacts, dim=self.count,
+                  inputs=[x, c.point, c.normal, c.face, s.point, s.normal, s.face, self.thickness,
+                          int(self.settings.ground), 0.0, self.body_push, self.ground_push], device=self.device)
+
+    def friction(self, x, x_start, dt: float) -> None:
+        """Coulomb friction for the substep's contact pushes (then forget them)."""
+        wp.launch(kernels.apply_friction, dim=self.count,
+                  inputs=[x, x_start, self.contact.normal, self.contact.velocity, self.second.normal,
+                          self.second.face, self.friction_coefficient, dt, self.body_push, self.ground_push], device=self.device)
+
+    def contact_depth(self, particle: int, x: np.ndarray) -> float | None:
+        """How far (m) ``particle`` at ``x`` [3] is inside its contact's thickness (None: no contact)."""
+        if self.contact.face.numpy()[particle] < 0:
+            return None
+        point, normal = self.contact.point.numpy()[particle], self.contact.normal.numpy()[particle]
+        return self.thickness - float(np.dot(x - point, normal))

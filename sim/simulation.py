@@ -1,0 +1,136 @@
+"""A cloth simulation: a static model, its state, the body as a collider, one registered solver, and
+the frame loop (Newton's split: ``Model`` static, ``State`` per step, ``Solver.step(state_in,
+state_out, collider, dt)``).
+
+Everything is in the world frame (Z up, metres, seconds, kilograms). Per frame the body moves
+linearly from its previous vertices to the next; the solver takes ``settings.substeps`` substeps.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from darts.geometry.warp_runtime import warp
+from sim import kernels
+from sim.collider import BodyCollider
+from sim.model import ClothModel
+from sim.settings import SimSettings
+from sim.solvers import solver_class
+from sim.state import ClothState
+
+wp = warp()
+
+
+@dataclass
+class FrameMeasure:
+    """Fractions of particles inside the body — by the sign at their closest body point, those of
+    them where the posed body overlaps itself (armpits, a deep squat) so that no place outside it
+    exists, and by the body's winding number (inside any part, overlaps included) — the largest
+    speed (m/s), whether every value is finite, and how many garment edges pass through a garment
+    triangle. ``penetration_winding`` is None unless asked for (it costs about four times the rest)."""
+
+    penetration: float
+    penetration_in_body_overlap: float
+    penetration_winding: float | None
+    max_speed: float
+    finite: bool
+    self_intersections: int
+
+
+class Simulation:
+    """Steps ``model`` (particles at ``positions`` [P,3], world frame) on a body mesh given frame by frame."""
+
+    def __init__(self, model: ClothModel, positions: np.ndarray, body_faces: np.ndarray,
+                 body_vertices: np.ndarray, settings: SimSettings):
+        settings.check()
+        self.model, self.settings = model, settings
+        self.device = device = settings.device
+        self.count = len(model.rest)
+        self.thickness = float(model.material["thickness"])
+        self.state = ClothState(positions, device)  # what every substep writes
+        self.previous = ClothState(positions, device)  # the state the substep started from
+        self.collider = BodyCollider(body_faces, body_vertices, self.count, self.thickness,
+                                     float(model.material["friction"]), settings)
+        self.solver = solver_class(settings.solver)(model, self.state, settings)
+        # The same body surface with winding-number support, refit only to measure.
+        self._winding = wp.Mesh(points=self.collider.points, indices=self.collider.mesh.indices,
+                                support_winding_number=True)
+        self._inside = wp.zeros(3, dtype=wp.int32, device=device)
+        self._max_speed = wp.zeros(1, dtype=float, device=device)
+        self._finite = wp.zeros(1, dtype=wp.int32, device=device)
+        self.time = 0.0
+
+    @property
+    def x(self):
+        """Particle positions (Warp vec3 array, the state every substep writes)."""
+        return self.state.x
+
+    @property
+    def v(self):
+        """Particle velocities (Warp vec3 array)."""
+        return self.state.v
+
+    @property
+    def self_contact(self):
+        return self.solver.self_contact
+
+    def step_frame(self, body_next: np.ndarray) -> None:
+        """Advance one frame (1 / fps seconds) while the body moves to ``body_next`` [V,3]."""
+        self.collider.begin_frame(body_next)
+        substeps = self.settings.substeps
+        dt = 1.0 / (self.settings.fps * substeps)
+        for s in range(substeps):
+            self.previous.assign(self.state)
+            self.solver.step(self.previous, self.state, self.collider, dt, self.time + (s + 1) * dt, s)
+        self.time += 1.0 / self.settings.fps
+        self.collider.end_frame()
+
+    def measure(self, winding: bool = False) -> FrameMeasure:
+        """What ``FrameMeasure`` holds, right now (with the winding-number penetration if ``winding``)."""
+        self._inside.zero_()
+        self._max_speed.zero_()
+        self._finite.fill_(1)
+        if winding:
+            self._winding.refit()
+        wp.launch(kernels.frame_measures, dim=self.count,
+                  inputs=[self.collider.mesh.id, self._winding.id, int(winding), self.state.x, self.state.v, self._inside,
+                          self._max_speed, self._finite], device=self.device)
+        inside = self._inside.numpy()
+        finite = bool(self._finite.numpy()[0])
+        crossings = int(self.solver.self_contact.crossing_edges().sum()) if finite else 0
+        return FrameMeasure(float(inside[0]) / self.count, float(inside[1]) / self.count,
+                            float(inside[2]) / self.count if winding else None,
+                            float(self._max_speed.numpy()[0]), finite, crossings)
+
+    def diagnose(self) -> str:
+        """Which particle and constraint a blow-up starts from: the first non-finite particle (else the
+        fastest), and the most violated constraint on it (edge strain, seam spring, body or self contact)."""
+        x, v = self.state.positions(), self.state.velocities()
+        bad = ~np.isfinite(x).all(1) | ~np.isfinite(v).all(1)
+        particle = int(np.argmax(bad)) if bad.any() else int(np.argmax(np.linalg.norm(v, axis=1)))
+        model, found = self.model, []
+        mine = np.any(model.edges == particle, axis=1)
+        if mine.any():
+            e = model.edges[mine]
+            strain = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1) / model.edge_rest[mine] - 1.0
+            worst = int(np.nanargmax(np.abs(np.nan_to_num(strain, nan=np.inf))))
+            found.append((abs(strain[worst]), f"edge {e[worst, 0]}-{e[worst, 1]} strained {100 * strain[worst]:+.0f} %"))
+        for s in np.flatnonzero(np.any(model.springs == particle, axis=1)):
+            a, b = model.springs[s]
+            gap = np.linalg.norm(x[a] - x[b]) - model.spring_rest[s]
+            found.append((gap / max(self.thickness, 1e-6), f"seam '{model.seam_names[model.spring_seam[s]]}' spring "
+                                                           f"{a}-{b} off its rest length by {1e3 * gap:.1f} mm"))
+        depth = self.collider.contact_depth(particle, x[particle])
+        if depth is not None:
+            found.append((depth / self.thickness, f"body contact {1e3 * depth:.1f} mm deep"))
+        if self.settings.self_contact and self.solver.self_contact.face.numpy()[particle] >= 0:
+            found.append((0.0, f"self contact with garment triangle {self.solver.self_contact.face.numpy()[particle]}"))
+        speed = np.linalg.norm(v[particle])
+        state = "non-finite" if bad[particle] else f"at {speed:.1f} m/s"
+        worst = max(found, key=lambda item: np.nan_to_num(item[0], nan=np.inf))[1] if found else "no constraint"
+        return f"particle {particle} {state}, worst constraint on it: {worst}"
+
+    def positions(self) -> np.ndarray:
+        """Particle positions [P,3] (float64 copy)."""
+        return self.state.positions()

@@ -1,0 +1,99 @@
+"""What every cloth solver shares: the model on the device, external forces, self-contact, and the
+contact stage run with the body collider.
+
+A solver is built once from the static ``ClothModel`` and the settings; ``step(state_in, state_out,
+collider, dt, time, substep)`` advances the cloth by one substep of ``dt`` seconds ending at ``time``
+(``substep``: its index in the frame), reading ``state_in`` and writing ``state_out`` (which holds a
+copy of ``state_in`` when called). World frame, Z up, SI units.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from darts.geometry.warp_runtime import warp
+from sim import kernels
+from sim.collider import BodyCollider
+from sim.model import ClothModel
+from sim.self_contact import SelfContact
+from sim.settings import SimSettings
+from sim.state import ClothState, float_array, int_array
+from sim.wind import Wind
+
+wp = warp()
+
+#: Self-contact keeps two layers this many material thicknesses apart (centre to centre).
+SELF_SEPARATION = 1.0
+#: Triangles with a corner closer than this many median rest edge lengths to a particle on the rest
+#: garment (and at least the self-contact search reach: the rest shape is never in contact with
+#: itself) are its neighbours, never its contacts.
+SELF_EXCLUSION = 1.5
+
+
+def hinge_stiffness(model: ClothModel) -> np.ndarray:
+    """Per-hinge bending stiffness kappa = k_b 3 |e|^2 / (A_1 + A_2) (N m), from the rest shape."""
+    rest = model.rest
+    i, j, k, l = (rest[model.hinges[:, c]] for c in range(4))
+    area1 = 0.5 * np.linalg.norm(np.cross(j - i, k - i), axis=1)
+    area2 = 0.5 * np.linalg.norm(np.cross(l - i, j - i), axis=1)
+    edge2 = np.sum((j - i) ** 2, axis=1)
+    return model.material["bend_stiffness"] * 3.0 * edge2 / np.maximum(area1 + area2, 1e-12)
+
+
+class Solver:
+    """Base of the registered solvers (``name``: the registry key; ``default_substeps``: per frame at
+    30 fps; ``iterations_help``: what ``SimSettings.iterations`` means to it, or None)."""
+
+    name = ""
+    default_substeps = 10
+    iterations_help: str | None = None
+
+    def __init__(self, model: ClothModel, state: ClothState, settings: SimSettings):
+        self.model, self.settings = model, settings
+        self.device = device = settings.device
+        self.count = len(model.rest)
+        self.mass = float_array(model.mass, device)
+        self.inverse_mass = float_array(1.0 / model.mass, device)
+        self.faces = int_array(model.faces, device)
+        self.force = wp.zeros_like(state.x)
+        self.wind = Wind(settings.wind, settings.gust, settings.seed)
+        thickness = float(model.material["thickness"])
+        self.self_contact = SelfContact(
+            state.x, model.rest, model.faces, model.edges, SELF_SEPARATION * thickness,
+            max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * thickness + settings.contact_reach),
+            device)
+        self.damping = float(np.exp(-settings.damping / (settings.fps * settings.substeps)))  # per substep
+
+    def step(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float, time: float,
+             substep: int) -> None:
+        raise NotImplementedError
+
+    # -- pieces the solvers call ---------------------------------------------------------------
+    def external_forces(self, state: ClothState, time: float) -> None:
+        """force <- wind and air drag on every face (zero when the air density is 0)."""
+        self.force.zero_()
+        if self.settings.air_density > 0:
+            wp.launch(kernels.aerodynamic_forces, dim=len(self.model.faces),
+                      inputs=[self.faces, state.x, state.v, wp.vec3(*self.wind.at(time)), self.settings.air_density,
+                              self.settings.drag_coefficient, self.force], device=self.device)
+
+    def find_contacts(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float,
+                      substep: int) -> None:
+        """The body's contacts for this substep (``BodyCollider.update``) and, every
+        ``self_contact_interval`` substeps, the garment's self-contacts."""
+        collider.update(state_out.x, state_in.x, substep, dt)
+        if self.settings.self_contact and substep % self.settings.self_contact_interval == 0:
+            self.self_contact.search(state_in.x, self.self_contact.separation + self.settings.contact_reach)
+
+    def resolve_contacts(self, state: ClothState, collider: BodyCollider) -> None:
+        """Keep particles off the garment's own triangles (layers the body has pushed this substep
+        staying put), then push them out of the body and above the ground, which has the last word
+        (one sweep each)."""
+        if self.settings.self_contact:
+            self.self_contact.resolve(self.inverse_mass, collider.body_push)
+        collider.resolve(state.x)
+
+    def finish(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float) -> None:
+        """Friction for the substep's contact pushes, then v = (x_out - x_in) / dt."""
+        collider.friction(state_out.x, state_in.x, dt)
+        wp.launch(kernels.velocities_from_positions, dim=self.count, inputs=[state_out.x, state_in.x, dt, state_out.v],
+                  device=self.device)

@@ -1,0 +1,102 @@
+"""XPBD with small steps (Macklin et al. 2016, 2019): many substeps, few constraint sweeps each.
+
+Per substep: v += dt (g + f/m); predict x; place the body; then ``iterations`` Gauss-Seidel sweeps
+over the long-range tethers (``sim.tethers``, unless ``settings.tethers`` is off), edge stretch,
+contacts, then seam springs, after one bending sweep; v = dx / dt.
+Compliance is 1 / stiffness: edges use the material's stretch stiffness (N/m), seam springs their
+seam's stiffness, hinges kappa from ``hinge_stiffness``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from darts.geometry.warp_runtime import warp
+from sim import kernels
+from sim.coloring import color_order
+from sim.solvers.base import Solver, hinge_stiffness
+from sim.tethers import tethers
+from sim.state import float_array, int_array
+
+wp = warp()
+
+
+class ColoredConstraints:
+    """A constraint list on the device, sorted by colour; ``launch`` projects it colour by colour."""
+
+    def __init__(self, members: np.ndarray, fields: dict[str, np.ndarray], particle_count: int, device: str):
+        order, self.offsets = color_order(members, particle_count)
+        self.device = device
+        self.count = len(members)
+        members = np.asarray(members, np.int64)
+        self.members = int_array(members.reshape(len(members), members.shape[1] if members.ndim == 2 else 1)[order], device)
+        self.fields = {}
+        for name, values in fields.items():
+            values = np.asarray(values)[order]
+            self.fields[name] = int_array(values, device) if values.dtype.kind == "i" else float_array(values, device)
+        self.multiplier = wp.zeros(self.count, dtype=float, device=device)
+
+    def launch(self, kernel, fields: list, state: list) -> None:
+        """``kernel(offset, members, *fields, *state)`` over every constraint. The CPU backend runs a
+        launch's threads in order, so one launch over the sorted list equals a launch per colour."""
+        if self.count == 0:
+            return
+        spans = [(0, self.count)] if self.device == "cpu" else zip(self.offsets[:-1], self.offsets[1:])
+        for start, end in spans:
+            wp.launch(kernel, dim=int(end - start), inputs=[int(start), self.members, *fields, *state],
+                      device=self.device)
+
+
+def _compliance(stiffness: np.ndarray) -> np.ndarray:
+    return 1.0 / np.asarray(stiffness, np.float64)
+
+
+class XpbdSolver(Solver):
+    """``--solver xpbd``: the default."""
+
+    name = "xpbd"
+    default_substeps = 20
+    iterations_help = "constraint sweeps per substep"
+
+    def __init__(self, model, state, settings):
+        super().__init__(model, state, settings)
+        sprung = model.spring_stiffness > 0
+        self.stretch = ColoredConstraints(model.edges, {
+            "rest": model.edge_rest,
+            "compliance": _compliance(np.full(len(model.edges), model.material["stretch_stiffness"])),
+            "anchors": np.full((len(model.edges), 2), -1),
+        }, self.count, self.device)
+        self.seams = ColoredConstraints(model.springs[sprung], {
+            "rest": model.spring_rest[sprung], "compliance": _compliance(model.spring_stiffness[sprung]),
+            "anchors": model.spring_anchors[sprung],
+        }, self.count, self.device)
+        pairs, limits = tethers(model) if settings.tethers else (np.zeros((0, 2), np.int64), np.zeros(0))
+        self.tethers = ColoredConstraints(pairs, {"limit": limits}, self.count, self.device)
+        kappa = hinge_stiffness(model)
+        keep = kappa > 0
+        self.bending = ColoredConstraints(model.hinges[keep], {
+            "rest_angle": model.hinge_rest_angle[keep], "compliance": _compliance(kappa[keep]),
+        }, self.count, self.device)
+
+    def step(self, state_in, state_out, collider, dt, time, substep):
+        self.external_forces(state_in, time)
+        wp.launch(kernels.predict, dim=self.count,
+                  inputs=[state_in.x, state_in.v, self.force, self.inverse_mass, wp.vec3(*self.settings.gravity), dt,
+                          self.damping, state_out.x, state_out.v], device=self.device)
+        self.find_contacts(state_in, state_out, collider, dt, substep)
+        x = state_out.x
+        for group in (self.stretch, self.seams, self.bending):
+            group.multiplier.zero_()
+        b = self.bending.fields
+        self.bending.launch(kernels.solve_bending, [b["rest_angle"], b["compliance"]],
+                            [self.inverse_mass, dt, self.bending.multiplier, x])
+        t, d, seam = self.tethers.fields, self.stretch.fields, self.seams.fields
+        for _ in range(self.settings.iterations):
+            self.tethers.launch(kernels.solve_max_distances, [t["limit"]], [self.inverse_mass, x])
+            self.stretch.launch(kernels.solve_distances, [d["rest"], d["compliance"], d["anchors"]],
+                                [self.inverse_mass, dt, self.stretch.multiplier, x])
+            self.resolve_contacts(state_out, collider)
+            # Seams last: Gauss-Seidel favours the last sweep, and a seam squeezed between two layers
+            # or two body parts (an armpit) is otherwise pulled open by their contacts.
+            self.seams.launch(kernels.solve_distances, [seam["rest"], seam["compliance"], seam["anchors"]],
+                              [self.inverse_mass, dt, self.seams.multiplier, x])
+        self.finish(state_in, state_out, collider, dt)
