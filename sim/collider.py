@@ -57,7 +57,7 @@ class BodyCollider:
         self.body_push = wp.zeros(count, dtype=float, device=device)
         self.ground_push = wp.zeros(count, dtype=float, device=device)
         self.speed = settings.max_body_speed
-        self.time = 0.0
+        self.time = 0.0  # s since the run started, at the start of the current frame
 
     def begin_frame(self, body_next: np.ndarray) -> None:
         """The body will move from where it is now to ``body_next`` [V,3] during the next frame; the
@@ -97,8 +97,8 @@ class BodyCollider:
             started = self.time + substep * dt
             wp.launch(kernels.find_contacts, dim=self.count,
                       inputs=[self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
-                              CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start, settings.contact_skin, self.speed,
-                              self.query_time, self.query_offset, self.contact.face,
+                              CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start,
+                              settings.contact_skin, self.speed, self.query_time, self.query_offset, self.contact.face,
                               self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
                               self.second.uv, self.second.local],
                       device=self.device)

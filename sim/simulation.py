@@ -59,7 +59,6 @@ class Simulation:
         self._inside = wp.zeros(3, dtype=wp.int32, device=device)
         self._max_speed = wp.zeros(1, dtype=float, device=device)
         self._finite = wp.zeros(1, dtype=wp.int32, device=device)
-        self.time = 0.0
 
     @property
     def x(self):
@@ -82,8 +81,7 @@ class Simulation:
         dt = 1.0 / (self.settings.fps * substeps)
         for s in range(substeps):
             self.previous.assign(self.state)
-            self.solver.step(self.previous, self.state, self.collider, dt, self.time + (s + 1) * dt, s)
-        self.time += 1.0 / self.settings.fps
+            self.solver.step(self.previous, self.state, self.collider, dt, self.collider.time + (s + 1) * dt, s)
         self.collider.end_frame()
 
     def measure(self, winding: bool = False) -> FrameMeasure:

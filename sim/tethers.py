@@ -24,6 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
+from darts.geometry.mesh import vertex_normals
 from sim.model import ClothModel
 
 #: Surface-tether radii in median edge lengths: a near ring and a far one.
@@ -38,16 +39,6 @@ JOINED_SEAM_STIFFNESS = 1000.0
 
 #: Two-edge hops join the surface graph only where the rest normals at their ends are this close (rad).
 FLAT_ANGLE = np.radians(10.0)
-
-
-def _vertex_normals(model: ClothModel) -> np.ndarray:
-    """Unit area-weighted vertex normals of the rest shape [P,3]."""
-    tri = model.rest[model.faces]
-    face_normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    normal = np.zeros_like(model.rest)
-    for corner in range(3):
-        np.add.at(normal, model.faces[:, corner], face_normal)
-    return normal / np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
 
 
 def _surface_graph(model: ClothModel) -> sp.csr_matrix:
@@ -67,7 +58,7 @@ def _surface_graph(model: ClothModel) -> sp.csr_matrix:
     # A two-edge hop's straight chord is the surface distance only where the surface is flat between
     # its ends: across a crease of the rest shape it is shorter, and a tether limited by it would
     # resist unfolding the crease. Hops whose ends' normals differ by more than FLAT_ANGLE are left out.
-    normal = _vertex_normals(model)
+    normal = vertex_normals(model.rest, model.faces)
     flat = np.einsum("ij,ij->i", normal[rows], normal[cols]) >= np.cos(FLAT_ANGLE)
     direct = np.asarray(adjacency[rows, cols]).ravel() > 0
     rows, cols = rows[flat | direct], cols[flat | direct]
