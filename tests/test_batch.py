@@ -59,9 +59,13 @@ def test_killed_batch_resumes_without_redoing_finished_jobs(coarse_garments, tmp
     out = tmp_path / "out"
     first = _darts_batch(spec, "-o", out, "--workers", "2")
     deadline = time.time() + 240
-    while time.time() < deadline and not any((d / "result.json").is_file() for d in _published(out)):
-        time.sleep(0.2)
-    in_flight = list(out.glob(".*.tmp-*"))
+    in_flight: list[Path] = []
+    while time.time() < deadline:  # kill once a job has finished while another is still being written
+        if any((d / "result.json").is_file() for d in _published(out)):
+            in_flight = list(out.glob(".*.tmp-*"))
+            if in_flight:
+                break
+        time.sleep(0.1)
     first.send_signal(signal.SIGKILL)
     first.wait()
     finished = {d.name: (d / "result.json").stat().st_mtime_ns for d in _published(out)}
