@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Callable, Iterable
 
 from darts.errors import DartsInputError
-from darts.fileio import atomic_path
+from darts.fileio import atomic_path, check_output
 
 #: Environment of every worker process: one thread in each pool.
 SINGLE_THREAD_ENV = {name: "1" for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
@@ -150,16 +150,11 @@ def _append(handle, row: dict) -> None:
 
 def check_out_dir(out_dir: Path) -> None:
     """Create ``out_dir`` or raise a DartsInputError saying why it cannot hold the jobs."""
-    out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise DartsInputError(out_dir, "exists and is not a directory")
+    out_dir = check_output(out_dir, directory=True)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
-        probe = out_dir / f".write-test-{uuid.uuid4().hex[:8]}"
-        probe.write_text("")
-        probe.unlink()
     except OSError as exc:
-        raise DartsInputError(out_dir, f"cannot write there ({exc.strerror or exc})") from None
+        raise DartsInputError(out_dir, f"cannot be created ({exc.strerror or exc})") from None
 
 
 def check_address(address: str, timeout: float = 5.0) -> None:

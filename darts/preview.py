@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from darts.errors import DartsInputError
-from darts.fileio import atomic_path
+from darts.fileio import atomic_path, check_output
 from darts.render import WORLD_FRONT_LEFT, draw_mesh
 
 PREVIEW_SUFFIXES = (".gif", ".mp4", ".png")
@@ -101,6 +101,17 @@ class _Painter:
         ax.set_title(f"frame {number}  ({number / self.animation.fps:.2f} s)", fontsize=9)
 
 
+def check_preview(path: str | os.PathLike) -> Path:
+    """``path`` as a Path if a preview can be written there (``check_output``, a suffix of
+    ``PREVIEW_SUFFIXES``, ffmpeg on PATH for .mp4), else a DartsInputError."""
+    if Path(path).suffix.lower() not in PREVIEW_SUFFIXES:
+        raise DartsInputError(path, f"preview must end in {', '.join(PREVIEW_SUFFIXES)}")
+    path = check_output(path)
+    if path.suffix.lower() == ".mp4" and shutil.which("ffmpeg") is None:
+        raise DartsInputError(path, "an .mp4 preview needs ffmpeg on PATH; use .gif or .png")
+    return path
+
+
 def render_preview(animation: Animation, path: str | os.PathLike, max_frames: int = 60, size: float = 4.0,
                    progress: bool = False) -> int:
     """Render ``animation`` to ``path`` (.gif, .mp4 or .png contact sheet); returns the frames drawn:
@@ -109,12 +120,8 @@ def render_preview(animation: Animation, path: str | os.PathLike, max_frames: in
     from matplotlib.figure import Figure
     from tqdm import tqdm
 
-    path = Path(path)
+    path = check_preview(path)
     suffix = path.suffix.lower()
-    if suffix not in PREVIEW_SUFFIXES:
-        raise DartsInputError(path, f"preview must end in {', '.join(PREVIEW_SUFFIXES)}")
-    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
-        raise DartsInputError(path, "an .mp4 preview needs ffmpeg on PATH; use .gif or .png")
     picks = frames_to_draw(animation.count, path, max_frames)
     if suffix == ".png":
         figure = Figure(figsize=(size * len(picks) / 1.6, size))

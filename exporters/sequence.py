@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from darts.errors import DartsInputError
+from darts.fileio import remove_stale_temporaries, temporary_prefix
 from exporters.streaming import StreamingWriter
 
 SEQUENCE_FORMATS = ("obj", "ply")
@@ -30,8 +31,9 @@ class MeshSequenceWriter(StreamingWriter):
                                    or any(not _FRAME_FILE.match(p.name) for p in self.path.iterdir())):
             raise DartsInputError(self.path, "exists and is not a mesh sequence; choose another output")
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale_temporaries(self.path)
         self.fps, self.format = float(fps), file_format
-        self._tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.", dir=self.path.parent))
+        self._tmp = Path(tempfile.mkdtemp(prefix=temporary_prefix(self.path), dir=self.path.parent))
         self._meshes: dict[str, tuple[np.ndarray, np.ndarray | None]] = {}
         self.frames_written = 0
 

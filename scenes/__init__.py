@@ -17,18 +17,25 @@ def shipped_garments() -> list[str]:
     return sorted(p.stem for p in GARMENTS_DIR.glob("*.npz"))
 
 
-def _resolve(name_or_path: str, folder: Path) -> Path:
+def _resolve(name_or_path: str, folder: Path, kind: str) -> Path:
     path = Path(name_or_path)
-    if not path.exists() and (folder / f"{name_or_path}.npz").is_file():
+    if path.exists() or path.is_symlink():  # a link that leads nowhere is the loader's to explain
+        return path
+    if (folder / f"{name_or_path}.npz").is_file():
         return folder / f"{name_or_path}.npz"
-    return path
+    from darts.errors import DartsInputError
+
+    names = sorted(p.stem for p in folder.glob("*.npz"))
+    raise DartsInputError(path, f"neither a file nor a shipped {kind} (shipped: {', '.join(names)})")
 
 
 def resolve_motion(name_or_path: str) -> Path:
-    """A motion path: the argument itself if it is a file, else the shipped motion of that name."""
-    return _resolve(name_or_path, MOTIONS_DIR)
+    """A motion path: the argument itself if it is a file, else the shipped motion of that name;
+    a DartsInputError listing the shipped motions when it is neither."""
+    return _resolve(name_or_path, MOTIONS_DIR, "motion")
 
 
 def resolve_garment(name_or_path: str) -> Path:
-    """A garment path: the argument itself if it is a file, else the shipped DART of that name."""
-    return _resolve(name_or_path, GARMENTS_DIR)
+    """A garment path: the argument itself if it is a file, else the shipped DART of that name; a
+    DartsInputError listing the shipped garments when it is neither."""
+    return _resolve(name_or_path, GARMENTS_DIR, "garment")

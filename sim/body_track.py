@@ -14,7 +14,9 @@ import torch
 
 from darts.body.lbs import axis_angle_to_matrix
 from darts.body.model import BodyModel
+from darts.errors import DartsInputError
 from darts.motion.amass import Motion
+from darts.motion.budget import check_frames
 from darts.motion.posing import motion_betas, pose_sequence
 from darts.motion.resample import resample
 
@@ -67,15 +69,17 @@ def build_body_track(body: BodyModel, motion: Motion, fps: float, settle: float,
     (the shape to simulate on); the body then also changes shape during the settle blend, so a
     garment made for one body is carried onto another."""
     if settle < 0:
-        raise ValueError(f"settle must be >= 0 s, got {settle}")
+        raise DartsInputError(None, f"settle must be >= 0 s, got {settle}")
     motion = resample(motion, fps) if abs(motion.fps - fps) > 1e-9 else motion
+    check_frames(round(settle * fps) + motion.num_frames, None, f"the settle of {settle:g} s and the motion at {fps:g} fps")
     count = int(round(settle * fps))
     target = motion_betas(body, motion, betas)
     start = target if start_betas is None else np.asarray(start_betas, np.float64)
     reshaping = len(target) + len(start) > 0 and not np.array_equal(np.pad(start, (0, max(0, len(target) - len(start)))),
                                                                     np.pad(target, (0, max(0, len(start) - len(target)))))
     if reshaping and count == 0:
-        raise ValueError("a body shape other than the garment's needs a settle period to change shape in")
+        raise DartsInputError(None, "a body shape other than the garment's (--betas) needs a settle period to change "
+                                    "shape in: give --settle > 0")
     if count:
         weights = (np.arange(count) / count)[:, None, None]
         blend = {name: arr[:1] * weights for name, arr in motion.parts().items()}

@@ -13,16 +13,17 @@ from pathlib import Path
 
 import numpy as np
 
+from darts import __version__
 from darts.body.io import load_body
 from darts.cli.errors import OneLineParser, run_guarded
 from darts.dart.export import panel_colors
 from darts.dart.io import load_dart
 from darts.dart.model import MATERIALS, parse_seam_setting
 from darts.errors import DartsInputError
-from darts.fileio import atomic_path
+from darts.fileio import atomic_path, check_output
 from darts.motion.amass import load_motion
 from darts.motion.resample import resample
-from darts.preview import PREVIEW_SUFFIXES, Animation, frames_to_draw, render_preview
+from darts.preview import Animation, check_preview, frames_to_draw, render_preview
 from exporters.sequence import SEQUENCE_FORMATS, MeshSequenceWriter
 from exporters.usd import USD_SUFFIXES, UsdAnimationWriter
 from scenes import resolve_garment, resolve_motion
@@ -49,6 +50,7 @@ def parser() -> argparse.ArgumentParser:
         prog="darts-sim",
         description="Simulate a DART garment on a body posed by an AMASS motion (Warp cloth solver). "
                     "Output frames are in the AMASS world frame: Z up, metres.")
+    p.add_argument("--version", action="version", version=f"darts-sim {__version__}")
     p.add_argument("garment", metavar="GARMENT", help="garment.npz (a DART) or a shipped garment name")
     p.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
     p.add_argument("-o", "--output", metavar="OUT", required=True,
@@ -108,12 +110,23 @@ def _frame_range(args, count: int) -> tuple[int, int]:
     return args.start, end
 
 
+def check_outputs(args) -> None:
+    """Every output of the run can be written (``check_output``): ``-o`` (a USD file, or a folder
+    for a mesh sequence), ``--stats`` and ``--preview``; else a DartsInputError before any work."""
+    out = Path(args.output)
+    if out.suffix and out.suffix.lower() not in USD_SUFFIXES:
+        raise DartsInputError(out, f"output must end in {', '.join(USD_SUFFIXES)} or be a directory (no suffix)")
+    check_output(out, directory=not out.suffix)
+    if args.stats:
+        check_output(args.stats)
+    if args.preview:
+        check_preview(args.preview)
+
+
 def _writer(args):
     out = Path(args.output)
-    if out.suffix.lower() in USD_SUFFIXES:
-        return UsdAnimationWriter(out, args.fps)
     if out.suffix:
-        raise DartsInputError(out, f"output must end in {', '.join(USD_SUFFIXES)} or be a directory (no suffix)")
+        return UsdAnimationWriter(out, args.fps)
     return MeshSequenceWriter(out, args.fps, args.format)
 
 
@@ -200,8 +213,7 @@ def execute(args) -> SimOutcome:
     """Run ``darts-sim`` for parsed ``args``: check every input and output, simulate, write the
     output, the stats and the preview. Bad input raises DartsInputError before anything is written."""
     settings = settings_from_args(args)
-    if args.preview and Path(args.preview).suffix.lower() not in PREVIEW_SUFFIXES:
-        raise DartsInputError(args.preview, f"preview must end in {', '.join(PREVIEW_SUFFIXES)}")
+    check_outputs(args)
     dart = load_dart(resolve_garment(args.garment))
     if args.material:
         dart.material_name, dart.material = args.material, dict(MATERIALS[args.material])
@@ -216,11 +228,7 @@ def execute(args) -> SimOutcome:
     if args.device != "cpu":
         _check_device(args.device)
     own, target = _shape(args, dart, body)
-    try:
-        track = build_body_track(body, motion, args.fps, args.settle, betas=target, start_betas=own,
-                                 progress=not args.quiet)
-    except ValueError as exc:
-        raise DartsInputError(None, f"{exc} (--betas differs from the DART's shape: give --settle > 0)") from None
+    track = build_body_track(body, motion, args.fps, args.settle, betas=target, start_betas=own, progress=not args.quiet)
 
     preview = _PreviewFrames(args, track)
     try:

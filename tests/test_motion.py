@@ -160,7 +160,7 @@ def test_text_file_renamed_npz_and_missing_file(tmp_path, run_darts):
     code, _, err = run_darts("motion", "info", path)
     assert code == 2 and "not a valid .npz archive" in err
     code, _, err = run_darts("motion", "info", tmp_path / "nothing.npz")
-    assert code == 2 and "no such file" in err
+    assert code == 2 and "neither a file nor a shipped motion" in err
 
 
 def test_motion_info_and_ground(run_darts, tmp_path):

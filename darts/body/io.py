@@ -17,7 +17,7 @@ import torch
 
 from darts.body.model import BodyModel
 from darts.errors import DartsInputError
-from darts.fileio import read_npz, require_finite, require_keys, save_npz
+from darts.fileio import check_input_file, read_npz, require_keys, require_real, save_npz
 
 DEFAULT_BODY_PATH = Path(__file__).parent / "data" / "darts_default_body.npz"
 DEFAULT_BODY_NAME = "darts-default-v1"
@@ -57,23 +57,39 @@ class _SMPLUnpickler(pickle.Unpickler):
         raise pickle.UnpicklingError(f"refusing to load {module}.{name}")
 
 
+#: Chumpy arrays wrap their value (``state["x"]``), sometimes a few times over; deeper is refused.
+_CHUMPY_DEPTH = 8
+
+
 def _plain(value, key: str, source) -> np.ndarray:
-    """Turn a chumpy stub or a sparse matrix into a dense numpy array."""
-    if isinstance(value, _ChumpyStub):
-        state = value.state if isinstance(value.state, dict) else {}
-        if "x" not in state:
+    """A chumpy stub (unwrapped at most ``_CHUMPY_DEPTH`` times) or a sparse matrix as a dense numpy
+    array; a value that is neither, nor an array of numbers, is refused naming ``key``."""
+    for _ in range(_CHUMPY_DEPTH):
+        if not isinstance(value, _ChumpyStub):
+            break
+        state = getattr(value, "state", None)
+        if not isinstance(state, dict) or "x" not in state:
             raise DartsInputError(source, f"'{key}' is a chumpy expression, not a plain chumpy array")
-        return _plain(state["x"], key, source)
+        value = state["x"]
+    else:
+        raise DartsInputError(source, f"'{key}' is a chumpy array nested more than {_CHUMPY_DEPTH} deep")
     if scipy.sparse.issparse(value):
-        return value.toarray()
-    return np.asarray(value)
+        value = value.toarray()
+    if not isinstance(value, np.ndarray | np.generic | int | float | list | tuple):
+        raise DartsInputError(source, f"'{key}' must be an array of numbers, found a {type(value).__name__}")
+    try:
+        array = np.asarray(value)
+    except (ValueError, TypeError, RecursionError) as exc:  # ragged or self-containing lists
+        raise DartsInputError(source, f"'{key}' is not an array of numbers ({type(exc).__name__})") from None
+    return require_real(key, array, source)
 
 
 def _read_pkl(path: Path) -> dict:
     try:
         with open(path, "rb") as handle:
             data = _SMPLUnpickler(handle, encoding="latin1").load()
-    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, IndexError, TypeError, ValueError) as exc:
+    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, IndexError, KeyError, TypeError, ValueError,
+            RecursionError, MemoryError, OverflowError) as exc:
         raise DartsInputError(path, f"not a readable SMPL pickle ({exc})") from None
     if not isinstance(data, dict):
         raise DartsInputError(path, f"expected a dict of arrays, found {type(data).__name__}")
@@ -81,8 +97,7 @@ def _read_pkl(path: Path) -> dict:
 
 
 def _read_arrays(path: Path) -> dict:
-    if not path.is_file():
-        raise DartsInputError(path, "no such file")
+    check_input_file(path, "body model file")
     if path.suffix.lower() == ".pkl":
         return _read_pkl(path)
     if path.suffix.lower() == ".npz":
@@ -105,7 +120,7 @@ def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=torch.
     require_keys(arrays, REQUIRED_KEYS, source)
     for key in REQUIRED_KEYS + ("posedirs",):
         if key in arrays:
-            require_finite(key, np.asarray(arrays[key]), source)
+            require_real(key, arrays[key], source)
     v_template = np.asarray(arrays["v_template"], np.float64)
     if v_template.ndim != 2 or v_template.shape[1] != 3 or len(v_template) < 4:
         raise DartsInputError(source, f"'v_template' has shape {v_template.shape}, expected [V, 3]")
@@ -134,7 +149,12 @@ def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=torch.
     as_tensor = lambda a: torch.as_tensor(a, dtype=dtype)  # noqa: E731
     metadata = {}
     if "metadata_json" in arrays:
-        metadata = json.loads(str(arrays["metadata_json"]))
+        try:
+            metadata = json.loads(str(arrays["metadata_json"]))
+        except ValueError as exc:
+            raise DartsInputError(source, f"'metadata_json' is not JSON ({exc})") from None
+        if not isinstance(metadata, dict):
+            raise DartsInputError(source, "'metadata_json' must be a JSON object")
     return BodyModel(
         name=name or metadata.get("name") or Path(source).stem,
         v_template=as_tensor(v_template), faces=faces, shapedirs=as_tensor(shapedirs),

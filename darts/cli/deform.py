@@ -9,7 +9,7 @@ from darts.crdl.layer import CrdlWeights
 from darts.crdl.targets import EDITS, edit_targets, parse_edit, read_target_lines
 from darts.dart.io import load_dart, save_dart
 from darts.errors import DartsInputError
-from darts.fileio import atomic_path
+from darts.fileio import atomic_path, check_output
 from darts.templates.build import DEFAULT_EASE
 
 
@@ -18,6 +18,9 @@ def deform(args) -> int:
         raise DartsInputError(None, "darts deform needs either --lines LINES.npz or one or more --edit NAME=METRES")
     if (args.mask is None) != (args.camera is None):
         raise DartsInputError(None, "--mask and --camera go together")
+    check_output(args.output, (".npz",))
+    if args.report:
+        check_output(args.report)
     dart = load_dart(args.garment)
     body = load_body(args.body)
     if body.name != dart.body_model:

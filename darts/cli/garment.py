@@ -12,7 +12,7 @@ from darts.dart.export import MESH_FORMATS, export_mesh, panel_colors
 from darts.dart.io import load_dart, save_dart
 from darts.dart.model import MATERIALS, Dart, parse_seam_setting
 from darts.errors import DartsInputError
-from darts.fileio import atomic_path
+from darts.fileio import atomic_path, check_output
 from darts.geometry.mesh import loop_length, vertex_normals
 from darts.templates.build import DEFAULT_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
@@ -26,6 +26,7 @@ def template(args) -> int:
         raise DartsInputError(None, "darts template needs CATEGORY and -o OUT.npz (or --list)")
     if args.category not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{args.category}' (see 'darts template --list')")
+    check_output(args.output, (".npz",))
     seams = [parse_seam_setting(text) for text in args.seam]
     body = load_body(args.body)
     dart = make_dart(args.category, body, args.betas, args.edge_length, seams, args.accessory, args.material)
@@ -78,6 +79,8 @@ def render_png(dart: Dart, path) -> None:
 
 
 def inspect(args) -> int:
+    if args.png:
+        check_output(args.png, (".png",))
     dart = load_dart(args.garment)
     info = summary(dart)
     if args.png:
@@ -101,6 +104,7 @@ def inspect(args) -> int:
 
 
 def export(args) -> int:
+    check_output(args.output, MESH_FORMATS)
     dart = load_dart(args.garment)
     export_mesh(dart, args.output)
     print(f"wrote {args.output}: {len(dart.vertices)} vertices, {len(dart.panel_names)} panel colours")

@@ -29,7 +29,7 @@ from darts.cli.deform import add_parser as add_deform_parser
 from darts.cli.reconstruct import add_parsers as add_reconstruct_parsers
 from darts.cli.garment import add_parsers as add_garment_parsers
 from darts.errors import DartsInputError
-from darts.fileio import save_npz
+from darts.fileio import check_output, save_npz
 from darts.motion.amass import load_motion
 from darts.motion.posing import motion_betas, pose_sequence
 from darts.motion.resample import resample
@@ -85,6 +85,7 @@ def body_info(args) -> int:
 
 
 def body_export(args) -> int:
+    check_output(args.output, (".npz",))
     model = load_body(args.body)
     _check_betas(model, args.betas)
     export_smpl_npz(model.to(torch.float64), args.output, betas=args.betas)
@@ -93,6 +94,7 @@ def body_export(args) -> int:
 
 
 def body_pose(args) -> int:
+    check_output(args.output, (".npz",))
     model = load_body(args.body)
     _check_betas(model, args.betas)
     motion = load_motion(resolve_motion(args.motion))
@@ -129,8 +131,9 @@ def motion_info(args) -> int:
 
 
 def render(args) -> int:
-    from darts.preview import read_usd_animation, render_preview
+    from darts.preview import check_preview, read_usd_animation, render_preview
 
+    check_preview(args.output)
     animation = read_usd_animation(args.usd)
     drawn = render_preview(animation, args.output, max_frames=args.max_frames, progress=True)
     print(f"wrote {args.output}: {drawn} of {animation.count} frames")

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from darts.dart.model import FORMAT, REGIMES, Dart, Seam
+from darts.dart.model import FORMAT, MATERIAL_RANGES, REGIMES, Dart, Seam
 from darts.errors import DartsInputError
-from darts.fileio import read_npz, require_finite, require_keys, save_npz
+from darts.fileio import read_npz, require_keys, require_real, save_npz
 from darts.templates.categories import CATEGORIES
 
 MATERIAL_KEYS = ("density", "stretch_stiffness", "bend_stiffness", "friction", "thickness")
@@ -66,8 +66,7 @@ def _shape(arrays, key, shape, kind, source):
         raise DartsInputError(source, f"'{key}' has dtype {value.dtype}, expected {expected}")
     if len(shape) != value.ndim or any(s is not None and s != v for s, v in zip(shape, value.shape)):
         raise DartsInputError(source, f"'{key}' has shape {value.shape}, expected {tuple('N' if s is None else s for s in shape)}")
-    require_finite(key, value, source)
-    return value
+    return value if kind == "U" else require_real(key, value, source)
 
 
 def _indices(arrays, key, bound, source):
@@ -94,6 +93,7 @@ def dart_from_arrays(arrays: dict, source) -> Dart:
         raise DartsInputError(source, f"unknown category '{category}'")
     vertices = _shape(arrays, "vertices", (None, 3), "f", source)
     faces = _indices(arrays | {"faces": _shape(arrays, "faces", (None, 3), "iu", source)}, "faces", len(vertices), source)
+    _check_surface(vertices, faces, source)
     panel_names = [str(n) for n in _shape(arrays, "panel_names", (None,), "U", source)]
     panel = _indices(arrays | {"panel": _shape(arrays, "panel", (len(faces),), "iu", source)}, "panel", len(panel_names), source)
     line_names = [str(n) for n in _shape(arrays, "line_names", (None,), "U", source)]
@@ -121,9 +121,13 @@ def dart_from_arrays(arrays: dict, source) -> Dart:
     if len(position) and (position.min() < 0 or position.max() > 1):
         raise DartsInputError(source, "'pair_position' must lie in [0, 1]")
     material = {k: float(_shape(arrays, f"material_{k}", (), "f", source)) for k in MATERIAL_KEYS}
-    if any(v < 0 for v in material.values()) or material["density"] <= 0:
-        raise DartsInputError(source, "material parameters must be >= 0 (density > 0)")
+    for key, value in material.items():
+        low, high = MATERIAL_RANGES[key]
+        if not low <= value <= high:
+            raise DartsInputError(source, f"'material_{key}' is {value:g}, outside the range of cloth [{low:g}, {high:g}]")
     hull_vertices = hull_faces = None
+    if ("hull_vertices" in arrays) != ("hull_faces" in arrays):
+        raise DartsInputError(source, "'hull_vertices' and 'hull_faces' come together (one of them is missing)")
     if "hull_vertices" in arrays:
         hull_vertices = _shape(arrays, "hull_vertices", (None, 3), "f", source)
         hull_faces = _indices(arrays | {"hull_faces": _shape(arrays, "hull_faces", (None, 3), "iu", source)},
@@ -141,6 +145,24 @@ def dart_from_arrays(arrays: dict, source) -> Dart:
         raise DartsInputError(source, "'pair_active' does not match the seams' partial ranges")
     _check_lines(dart, source)
     return dart
+
+
+#: The sides of a garment's bounding box, metres: the largest side at least a glove's, at most a
+#: gown's train (a file in millimetres or a point cloud collapsed to a point is refused).
+GARMENT_SIZE = (0.05, 5.0)
+
+
+def _check_surface(vertices: np.ndarray, faces: np.ndarray, source) -> None:
+    """A garment is a surface of a garment's size: at least one triangle, every triangle with three
+    different corners, its bounding box's largest side within ``GARMENT_SIZE``."""
+    if len(faces) == 0:
+        raise DartsInputError(source, "the garment has no triangles")
+    if ((faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])).any():
+        raise DartsInputError(source, "a triangle of 'faces' repeats a corner")
+    size = float(np.ptp(vertices[np.unique(faces)], axis=0).max())
+    if not GARMENT_SIZE[0] <= size <= GARMENT_SIZE[1]:
+        raise DartsInputError(source, f"the garment is {size:.3g} m across; a garment in metres is "
+                                      f"{GARMENT_SIZE[0]:g} to {GARMENT_SIZE[1]:g} m")
 
 
 def _check_lines(dart: Dart, source) -> None:

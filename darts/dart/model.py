@@ -33,6 +33,14 @@ MATERIALS = {
     "denim": dict(density=0.40, stretch_stiffness=20000.0, bend_stiffness=1e-4, friction=0.5, thickness=0.003),
     "silk": dict(density=0.08, stretch_stiffness=2000.0, bend_stiffness=1e-6, friction=0.2, thickness=0.001),
 }
+#: What a garment's material may be, [low, high] in SI units: from gauze to heavy leather (density
+#: kg/m^2, thickness m), from knit to webbing (stretch N/m), no friction to rubber. Outside these the
+#: solver's contact distances (the thickness) or time step (the masses against the stiffness) are
+#: not cloth's, and the run fails on its first step instead of at the door.
+MATERIAL_RANGES = {
+    "density": (1e-3, 10.0), "stretch_stiffness": (1.0, 1e7), "bend_stiffness": (0.0, 1.0), "friction": (0.0, 2.0),
+    "thickness": (1e-4, 0.05),
+}
 
 
 @dataclass

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from darts.errors import DartsInputError
-from darts.fileio import read_npz, require_finite, save_npz
+from darts.fileio import read_npz, require_keys, require_real, save_npz
 
 NUM_BODY_JOINTS = 22  # the root plus 21 body joints, common to SMPL, SMPL-H and SMPL-X
 NUM_HAND_JOINTS = 30  # 15 per hand, left then right (MANO order)
@@ -73,14 +73,11 @@ class Motion:
 
 
 def _frames(arrays: dict, key: str, width: int, frames: int | None, path) -> np.ndarray:
-    value = np.asarray(arrays[key])
-    if value.dtype.kind not in "fiu":
-        raise DartsInputError(path, f"'{key}' must be numeric, found dtype {value.dtype}")
+    value = require_real(key, arrays[key], path)
     if value.ndim != 2 or value.shape[1] != width:
         raise DartsInputError(path, f"'{key}' has shape {value.shape}, expected [T, {width}]")
     if frames is not None and len(value) != frames:
         raise DartsInputError(path, f"'{key}' has {len(value)} frames, 'trans' has {frames}")
-    require_finite(key, value, path)
     return value.astype(np.float64)
 
 
@@ -116,8 +113,7 @@ def load_motion(path: str | os.PathLike) -> Motion:
     """Load and validate an AMASS-format ``.npz``; any problem raises DartsInputError naming the file."""
     path = Path(path)
     arrays = read_npz(path)
-    if "trans" not in arrays:
-        raise DartsInputError(path, "missing key 'trans' (not an AMASS motion file)")
+    require_keys(arrays, ["trans"], path, "an AMASS motion file")
     trans = _frames(arrays, "trans", 3, None, path)
     frames = len(trans)
     if frames == 0:
@@ -125,9 +121,7 @@ def load_motion(path: str | os.PathLike) -> Motion:
     fps = _frame_rate(arrays, path)
     common = dict(trans=trans, fps=fps, gender=_gender(arrays), path=str(path))
     if "betas" in arrays:
-        betas = np.asarray(arrays["betas"], np.float64).reshape(-1)
-        require_finite("betas", betas, path)
-        common["betas"] = betas
+        common["betas"] = require_real("betas", arrays["betas"], path).astype(np.float64).reshape(-1)
     if "poses" in arrays:
         width = np.asarray(arrays["poses"]).shape[-1] if np.asarray(arrays["poses"]).ndim == 2 else -1
         layouts = {72: "amass-smpl", 156: "amass-smplh", 165: "amass-smplx"}

@@ -7,6 +7,7 @@ from tqdm import tqdm
 
 from darts.body.model import BodyModel
 from darts.motion.amass import Motion
+from darts.motion.budget import check_posed_bytes
 
 
 def motion_betas(model: BodyModel, motion: Motion, betas=None) -> np.ndarray:
@@ -25,6 +26,7 @@ def pose_sequence(model: BodyModel, motion: Motion, betas=None, ground: bool = F
 
     ``betas`` is one shape [K] or one per frame [T,K] (a body changing shape). With ``ground`` the
     whole sequence is shifted along Z so its lowest vertex touches z = 0."""
+    check_posed_bytes(motion.num_frames, model.num_vertices + model.num_joints, motion.path)
     pose = motion.model_pose(model.num_joints)
     shape = torch.as_tensor(motion_betas(model, motion, betas), dtype=model.dtype)
     per_frame = shape.ndim == 2

@@ -5,6 +5,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from darts.motion.amass import Motion
+from darts.motion.budget import check_frames
 
 
 def slerp_rotvecs(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -19,7 +20,9 @@ def resample(motion: Motion, fps: float) -> Motion:
     if not np.isfinite(fps) or fps <= 0:
         raise ValueError(f"fps must be positive, got {fps}")
     # Rates like AMASS's 120.00004577 are nominal: a frame within 0.1 % of the end still counts.
-    count = int(np.floor(motion.duration * fps + 1e-3)) + 1
+    count = np.floor(motion.duration * fps + 1e-3) + 1
+    check_frames(count, motion.path, f"the motion resampled to {fps:g} fps")
+    count = int(count)
     src = np.arange(count) * (motion.fps / fps)
     lo = np.minimum(np.floor(src).astype(int), motion.num_frames - 1)
     hi = np.minimum(lo + 1, motion.num_frames - 1)
