@@ -5,9 +5,10 @@ import os
 
 
 class DartsInputError(ValueError):
-    """A file or argument is not what it claims to be. ``str()`` names the file and the problem."""
+    """A file or argument is not what it claims to be. ``str()`` names the file and the problem on
+    one line: line breaks inside ``problem`` (a quoted value, a library's message) become spaces."""
 
     def __init__(self, source: str | os.PathLike | None, problem: str):
         self.source = None if source is None else os.fspath(source)
-        self.problem = problem
+        self.problem = " ".join(problem.split())
         super().__init__(f"{self.source}: {problem}" if self.source else problem)

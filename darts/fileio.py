@@ -48,8 +48,8 @@ def _alive(pid: int) -> bool:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except PermissionError:  # someone else's process
-        return True
+    except PermissionError:  # someone else's process: alive
+        pass
     return True
 
 
@@ -101,8 +101,9 @@ def read_input(path: str | os.PathLike, kind: str) -> bytes:
     """The bytes of the input file ``path`` (a ``kind``: "camera file", "batch SPEC", ...), or a
     DartsInputError saying what it is instead (``check_input_file``)."""
     path = check_input_file(path, kind)
-    if path.stat().st_size > MAX_INPUT_BYTES:
-        raise DartsInputError(path, f"is {path.stat().st_size / 2**30:.1f} GiB, more than a {kind} can be "
+    size = path.stat().st_size
+    if size > MAX_INPUT_BYTES:
+        raise DartsInputError(path, f"is {size / 2**30:.1f} GiB, more than a {kind} can be "
                                     f"({MAX_INPUT_BYTES / 2**30:.0f} GiB)")
     try:
         return path.read_bytes()
@@ -244,3 +245,12 @@ def require_real(name: str, array: np.ndarray, source) -> np.ndarray:
     if array.dtype.kind == "f" and not np.isfinite(array).all():
         raise DartsInputError(source, f"'{name}' contains NaN or infinite values")
     return array
+
+
+def require_indices(name: str, array: np.ndarray, source) -> np.ndarray:
+    """``array`` as int64 if it holds whole numbers: integers, or floats without a fraction and
+    below 2^53 (as some converted SMPL files store faces); else a DartsInputError naming it."""
+    array = require_real(name, array, source)
+    if array.dtype.kind == "f" and ((np.abs(array) > 2.0**53).any() or (array != np.round(array)).any()):
+        raise DartsInputError(source, f"'{name}' must be whole numbers (indices)")
+    return array.astype(np.int64)

@@ -10,12 +10,16 @@ import subprocess
 import sys
 import time
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from darts.body.io import DEFAULT_BODY_PATH as BODY
+from darts.body.io import REQUIRED_KEYS
 from darts.fileio import temporary_prefix
 from scenes import GARMENTS_DIR, MOTIONS_DIR
+from tests.helpers import ChumpyArray, legacy_pickle
 
 SKIRT = GARMENTS_DIR / "short-skirt.npz"
 SQUAT = MOTIONS_DIR / "squat.npz"
@@ -33,12 +37,14 @@ def _arrays(path):
         return {key: archive[key] for key in archive.files}
 
 
-def _set_zip_flag(path, local_offset, central_offset, value):
+def _patch_zip_headers(path, local_offset, central_offset, change):
+    """Rewrite one 16-bit field of every local and central zip header: ``value -> change(value)``."""
     raw = bytearray(path.read_bytes())
     for signature, offset in ((b"PK\x03\x04", local_offset), (b"PK\x01\x02", central_offset)):
         at = raw.find(signature)
         while at >= 0:
-            struct.pack_into("<H", raw, at + offset, value)
+            (value,) = struct.unpack_from("<H", raw, at + offset)
+            struct.pack_into("<H", raw, at + offset, change(value))
             at = raw.find(signature, at + 4)
     path.write_bytes(bytes(raw))
 
@@ -59,29 +65,32 @@ def _huge_member(path, arrays, key):
 @pytest.mark.parametrize("damage, problem", [
     ("encrypted", "is encrypted"), ("method", "compression method 99"), ("huge", "more than an input may hold"),
     ("betas text", "'betas' must be numbers"), ("betas record", "'betas' must be numbers"),
-    ("deflate", "is damaged"), ("no suffix", "is not a .npy array"),
+    ("deflate", "is damaged"), ("no suffix", "is not a .npy array"), ("lzma", "is damaged"),
+    ("not npy", "member 'poses.npy' is damaged"),
 ])
 def test_a_damaged_motion_is_one_line(damage, problem, tmp_path, run_sim):
     arrays, path, out = _arrays(SQUAT), tmp_path / "motion.npz", tmp_path / "out.usdc"
     if damage == "huge":
         _huge_member(path, arrays, "trans")
-    elif damage == "no suffix":
-        with zipfile.ZipFile(path, "w") as archive:
+    elif damage in ("no suffix", "lzma", "not npy"):
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_LZMA if damage == "lzma" else zipfile.ZIP_STORED) as archive:
             for name, value in arrays.items():
                 member = io.BytesIO()
                 np.save(member, value)
-                archive.writestr(name, member.getvalue())
+                data = b"not an array" if (damage == "not npy" and name == "poses") else member.getvalue()
+                archive.writestr(name if damage == "no suffix" else f"{name}.npy", data)
+        if damage == "lzma":  # the LZMA stream of the first member lies about its contents
+            raw = bytearray(path.read_bytes())
+            raw[120:140] = bytes(20)
+            path.write_bytes(bytes(raw))
     else:
         if damage.startswith("betas"):
             arrays["betas"] = np.array(["a", "b"]) if damage == "betas text" else np.zeros(3, [("x", "f4"), ("y", "i4")])
         (np.savez_compressed if damage == "deflate" else np.savez)(path, **arrays)
         if damage == "encrypted":
-            raw = bytearray(path.read_bytes())
-            raw[raw.find(b"PK\x03\x04") + 6] |= 1
-            raw[raw.find(b"PK\x01\x02") + 8] |= 1
-            path.write_bytes(bytes(raw))
+            _patch_zip_headers(path, 6, 8, lambda flags: flags | 1)  # general purpose bit 0: encrypted
         elif damage == "method":
-            _set_zip_flag(path, 8, 10, 99)
+            _patch_zip_headers(path, 8, 10, lambda method: 99)  # compression method
         elif damage == "deflate":
             raw = bytearray(path.read_bytes())
             raw[200:260] = bytes(60)
@@ -104,6 +113,21 @@ def test_a_garment_that_cannot_be_simulated_is_refused_at_the_door(change, probl
     assert problem in _one_line(code, err, path) and not (tmp_path / "out.usdc").exists()
     code, _, err = run_darts("inspect", path)
     assert problem in _one_line(code, err, path)
+
+
+def test_a_garment_without_vertices_is_refused(tmp_path, run_sim, run_darts):
+    """Every per-vertex, per-face, per-line and per-pair array empty, so that each agrees with the next."""
+    arrays = _arrays(SKIRT)
+    arrays.update(vertices=np.zeros((0, 3), np.float32), faces=np.zeros((0, 3), np.int32), panel=np.zeros(0, np.int32),
+                  line_names=np.zeros(0, "<U1"), line_offsets=np.zeros(1, np.int32), line_vertices=np.zeros(0, np.int32),
+                  pairs=np.zeros((0, 2), np.int32), pair_seam=np.zeros(0, np.int32),
+                  pair_position=np.zeros(0, np.float32), pair_active=np.zeros(0, bool))
+    path = tmp_path / "g.npz"
+    np.savez(path, **arrays)
+    code, _, err = run_sim(path, SQUAT, "-o", tmp_path / "o.usdc", "--frames", "2", "--quiet")
+    assert "no triangles" in _one_line(code, err, path) and not (tmp_path / "o.usdc").exists()
+    code, _, err = run_darts("inspect", path)
+    assert "no triangles" in _one_line(code, err, path)
 
 
 def test_hull_vertices_without_hull_faces_is_refused(tmp_path, run_darts):
@@ -164,6 +188,60 @@ def test_what_a_path_is_instead_of_a_file(target, problem, tmp_path, run_darts):
         os.symlink(tmp_path / "missing", path)
     code, _, err = run_darts("motion", "info", path)
     assert problem in _one_line(code, err, path)
+
+
+@pytest.mark.parametrize("option", [["--wind", "nan"], ["--wind", "1,2"], ["--material", "bogus"], ["--format", "xyz"]])
+def test_an_option_error_is_one_line_not_the_usage_block(option, tmp_path, run_sim):
+    code, _, err = run_sim(SKIRT, SQUAT, "-o", tmp_path / "o.usdc", *option)
+    assert option[0] in _one_line(code, err) and "usage:" not in err
+
+
+@pytest.mark.parametrize("value, problem", [
+    (np.array(["a", "b"]), "must be numbers"), (np.zeros((2, 3), complex), "must be numbers"),
+    (np.array([object(), 1], dtype=object), "'v_template'"),
+])
+def test_a_body_npz_with_the_wrong_dtype_is_one_line(value, problem, tmp_path, run_darts):
+    arrays = _arrays(BODY)
+    arrays["v_template"] = value
+    np.savez(tmp_path / "body.npz", **arrays)
+    code, _, err = run_darts("body", "info", "--body", tmp_path / "body.npz")
+    assert problem in _one_line(code, err, tmp_path / "body.npz")
+
+
+def _holding_itself():
+    array = ChumpyArray(None)
+    array.x = array
+    return array
+
+
+@pytest.mark.parametrize("make, problem", [
+    (_holding_itself, "nested more than"), (lambda: ChumpyArray(_nested(5000)), "nested more than"),
+    (lambda: {1.0, 2.0}, "found a set"), (lambda: "abc", "found a str"),
+])
+def test_a_body_pickle_holding_no_array_is_one_line(make, problem, tmp_path, run_darts):
+    arrays = _arrays(BODY)
+    legacy = {key: arrays[key] for key in REQUIRED_KEYS}
+    legacy["v_template"] = make()
+    (tmp_path / "body.pkl").write_bytes(legacy_pickle(legacy))
+    code, _, err = run_darts("body", "info", "--body", tmp_path / "body.pkl")
+    assert problem in _one_line(code, err, tmp_path / "body.pkl")
+
+
+def _nested(depth):
+    value = np.zeros((6890, 3))
+    for _ in range(depth):
+        value = ChumpyArray(value)
+    return value
+
+
+def test_an_unreadable_file_says_so_not_that_it_is_no_zip(tmp_path, run_darts, monkeypatch):
+    """Permission is simulated (``chmod 0`` does not stop root, who runs CI)."""
+    path = tmp_path / "motion.npz"
+    path.write_bytes(SQUAT.read_bytes())
+    real_access = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode, **kw: Path(p) != path and real_access(p, mode, **kw))
+    code, _, err = run_darts("motion", "info", path)
+    assert "permission denied" in _one_line(code, err, path)
 
 
 def test_darts_sim_has_a_version(capsys):

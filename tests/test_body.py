@@ -17,7 +17,7 @@ from darts.body.lbs import axis_angle_to_matrix
 from darts.body.segmentation import PART_NAMES, body_segmentation, segment_body
 from darts.errors import DartsInputError
 from darts.fileio import save_npz
-from tests.helpers import random_motion_arrays
+from tests.helpers import ChumpyArray, legacy_pickle, random_motion_arrays
 from tests.reference_smpl import ReferenceSMPL, rodrigues
 
 
@@ -114,25 +114,13 @@ def _official_arrays(body, num_joints_layout="smpl"):
     return arrays
 
 
-def test_legacy_pickle_with_chumpy_and_sparse_loads_without_chumpy(body, tmp_path, monkeypatch):
+def test_legacy_pickle_with_chumpy_and_sparse_loads_without_chumpy(body, tmp_path):
     """SMPL's legacy .pkl: chumpy arrays and a scipy sparse J_regressor, read with no chumpy installed."""
     arrays = _official_arrays(body)
-    ch_module = types.ModuleType("chumpy.ch")
-
-    class Ch:  # mimics chumpy.ch.Ch: its pickled state holds the array under 'x'
-        def __init__(self, x):
-            self.x = x
-
-    Ch.__module__, Ch.__qualname__ = "chumpy.ch", "Ch"
-    ch_module.Ch = Ch
-    monkeypatch.setitem(sys.modules, "chumpy", types.ModuleType("chumpy"))
-    monkeypatch.setitem(sys.modules, "chumpy.ch", ch_module)
-    legacy = dict(arrays, shapedirs=Ch(arrays["shapedirs"]), J_regressor=scipy.sparse.csc_matrix(arrays["J_regressor"]),
-                  bs_style="lbs", bs_type="lrotmin")
-    with open(tmp_path / "SMPL_NEUTRAL.pkl", "wb") as handle:
-        pickle.dump(legacy, handle, protocol=2)
-    monkeypatch.delitem(sys.modules, "chumpy")
-    monkeypatch.delitem(sys.modules, "chumpy.ch")
+    legacy = dict(arrays, shapedirs=ChumpyArray(arrays["shapedirs"]),
+                  J_regressor=scipy.sparse.csc_matrix(arrays["J_regressor"]), bs_style="lbs", bs_type="lrotmin")
+    (tmp_path / "SMPL_NEUTRAL.pkl").write_bytes(legacy_pickle(legacy))
+    assert "chumpy" not in sys.modules
 
     loaded = load_body(tmp_path / "SMPL_NEUTRAL.pkl")
     assert loaded.kind == "smpl" and loaded.num_betas == body.num_betas

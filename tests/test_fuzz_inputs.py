@@ -12,10 +12,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.sparse
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from darts.body.io import DEFAULT_BODY_PATH, load_body
+from darts.body.io import DEFAULT_BODY_PATH, REQUIRED_KEYS, load_body
 from darts.camera import Camera
 from darts.crdl.silhouette import read_mask
 from darts.crdl.targets import read_target_lines
@@ -24,6 +25,7 @@ from darts.errors import DartsInputError
 from darts.motion.amass import load_motion
 from scenes import GARMENTS_DIR, MOTIONS_DIR
 from sim.batch.spec import load_jobs
+from tests.helpers import ChumpyArray, legacy_pickle
 
 settings.register_profile("ci", max_examples=25, derandomize=True, deadline=None,
                           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
@@ -42,6 +44,8 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
     with np.load(path) as archive:
         return {key: archive[key] for key in archive.files}
 
+
+_ARRAYS = {source: _arrays(source) for source in (MOTION, GARMENT, DEFAULT_BODY_PATH)}
 
 #: Values a mistyped member may hold instead of its own.
 _WRONG_VALUES = st.sampled_from([
@@ -68,8 +72,13 @@ def _damaged_archive(data, arrays: dict[str, np.ndarray]) -> bytes:
             member = io.BytesIO()
             np.save(member, value)
             archive.writestr(name if (kind == "rename" and name == key) else f"{name}.npy", member.getvalue())
-    raw = bytearray(buffer.getvalue())
-    if kind in ("flip", "lzma"):
+    return _flip_or_cut(data, buffer.getvalue(), "flip" if kind == "lzma" else kind)
+
+
+def _flip_or_cut(data, raw: bytes, kind: str) -> bytes:
+    """``raw`` with 1 to 8 drawn bytes flipped (``kind`` "flip") or cut at a drawn length ("truncate")."""
+    raw = bytearray(raw)
+    if kind == "flip":
         for _ in range(data.draw(st.integers(1, 8))):
             raw[data.draw(st.integers(0, len(raw) - 1))] ^= data.draw(st.integers(1, 255))
     elif kind == "truncate":
@@ -93,9 +102,6 @@ def test_damaged_npz_files_load_or_name_the_file(load, source, data, tmp_path_fa
     path = tmp_path_factory.mktemp("fuzz") / source.name
     path.write_bytes(_damaged_archive(data, _ARRAYS[source]))
     _holds_contract(load, path)
-
-
-_ARRAYS = {source: _arrays(source) for source in (MOTION, GARMENT, DEFAULT_BODY_PATH)}
 
 
 @given(data=st.data())
@@ -151,19 +157,57 @@ def test_damaged_batch_specs_load_or_name_the_file(data, tmp_path_factory):
     _holds_contract(load_jobs, path)
 
 
-def test_a_self_referencing_chumpy_pickle_is_refused(tmp_path):
-    """A chumpy array that holds itself (or nests 5,000 deep) is refused, not recursed into."""
-    from darts.body import io as body_io
+def _holding_itself():
+    array = ChumpyArray(None)
+    array.x = array
+    return array
 
-    stub = type("Ch", (body_io._ChumpyStub,), {})
-    loop = object.__new__(stub)
-    loop.state = {"x": loop}
-    arrays = _arrays(DEFAULT_BODY_PATH)
-    # What _read_pkl does after the restricted unpickler: each value through _plain.
-    with pytest.raises(DartsInputError, match="nested more than"):
-        body_io._plain(loop, "v_template", tmp_path / "body.pkl")
-    with pytest.raises(DartsInputError, match="found a set"):
-        body_io._plain({1, 2}, "f", tmp_path / "body.pkl")
-    with pytest.raises(DartsInputError, match="found a str"):
-        body_io._plain("abc", "weights", tmp_path / "body.pkl")
-    assert body_io._plain(arrays["f"], "f", tmp_path / "body.pkl").shape == arrays["f"].shape
+
+def _nested(depth: int):
+    value = np.zeros(3)
+    for _ in range(depth):
+        value = ChumpyArray(value)
+    return value
+
+
+def _list_holding_itself():
+    values = [1.0]
+    values.append(values)
+    return values
+
+
+#: Values a legacy SMPL pickle may hold instead of an array (made fresh for each example).
+_PICKLED_VALUES = st.sampled_from([
+    lambda: {1, 2}, lambda: "text", lambda: None, lambda: {"x": 1}, lambda: [[1.0, 2.0], [3.0]],
+    _holding_itself, lambda: _nested(5000), lambda: _nested(3), _list_holding_itself,
+    lambda: ChumpyArray(np.array(["a"])), lambda: ChumpyArray(None), lambda: scipy.sparse.csr_matrix((2, 2)),
+    lambda: ChumpyArray(np.zeros(3, complex)), lambda: np.array([np.nan]),
+])
+
+
+def _legacy_body() -> dict:
+    """The bundled body as an official legacy ``.pkl`` holds it: chumpy arrays, a sparse regressor."""
+    arrays = {key: _ARRAYS[DEFAULT_BODY_PATH][key] for key in REQUIRED_KEYS}
+    for key in ("v_template", "shapedirs", "weights"):
+        arrays[key] = ChumpyArray(arrays[key])
+    arrays["J_regressor"] = scipy.sparse.csc_matrix(arrays["J_regressor"])
+    return arrays
+
+
+def test_the_legacy_body_pickle_of_the_fuzz_suite_loads(tmp_path):
+    (tmp_path / "body.pkl").write_bytes(legacy_pickle(_legacy_body()))
+    assert load_body(tmp_path / "body.pkl").num_vertices == len(_ARRAYS[DEFAULT_BODY_PATH]["v_template"])
+
+
+@given(data=st.data())
+def test_damaged_body_pickles_load_or_name_the_file(data, tmp_path_factory):
+    values = _legacy_body()
+    key = data.draw(st.sampled_from(sorted(values)))
+    kind = data.draw(st.sampled_from(["drop", "replace", "flip", "truncate"]))
+    if kind == "drop":
+        values.pop(key)
+    elif kind == "replace":
+        values[key] = data.draw(_PICKLED_VALUES)()
+    path = tmp_path_factory.mktemp("fuzz") / "body.pkl"
+    path.write_bytes(_flip_or_cut(data, legacy_pickle(values), kind))
+    _holds_contract(load_body, path)

@@ -16,8 +16,9 @@ import scipy.sparse
 import torch
 
 from darts.body.model import BodyModel
+from darts.body.segmentation import PART_NAMES
 from darts.errors import DartsInputError
-from darts.fileio import check_input_file, read_npz, require_keys, require_real, save_npz
+from darts.fileio import check_input_file, read_npz, require_indices, require_keys, require_real, save_npz
 
 DEFAULT_BODY_PATH = Path(__file__).parent / "data" / "darts_default_body.npz"
 DEFAULT_BODY_NAME = "darts-default-v1"
@@ -88,7 +89,8 @@ def _read_pkl(path: Path) -> dict:
     try:
         with open(path, "rb") as handle:
             data = _SMPLUnpickler(handle, encoding="latin1").load()
-    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, IndexError, KeyError, TypeError, ValueError,
+    # What damaged pickle data raises: LookupError covers a bad memo key, index or codec name.
+    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, LookupError, TypeError, ValueError,
             RecursionError, MemoryError, OverflowError) as exc:
         raise DartsInputError(path, f"not a readable SMPL pickle ({exc})") from None
     if not isinstance(data, dict):
@@ -125,7 +127,7 @@ def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=torch.
     if v_template.ndim != 2 or v_template.shape[1] != 3 or len(v_template) < 4:
         raise DartsInputError(source, f"'v_template' has shape {v_template.shape}, expected [V, 3]")
     nv = len(v_template)
-    faces = np.asarray(arrays["f"]).astype(np.int64)
+    faces = require_indices("f", arrays["f"], source)
     if faces.ndim != 2 or faces.shape[1] != 3 or faces.min(initial=0) < 0 or faces.max(initial=0) >= nv:
         raise DartsInputError(source, f"'f' must be [F, 3] indices into {nv} vertices")
     shapedirs = np.asarray(arrays["shapedirs"], np.float64)
@@ -138,7 +140,7 @@ def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=torch.
     regressor = np.asarray(arrays["J_regressor"], np.float64)
     if regressor.shape != (nj, nv):
         raise DartsInputError(source, f"'J_regressor' has shape {regressor.shape}, expected [{nj}, {nv}]")
-    parents = _parents_from_kintree(np.asarray(arrays["kintree_table"]).astype(np.int64), nj, source)
+    parents = _parents_from_kintree(require_indices("kintree_table", arrays["kintree_table"], source), nj, source)
     posedirs = arrays.get("posedirs")
     if posedirs is not None:
         posedirs = np.asarray(posedirs, np.float64)
@@ -170,8 +172,19 @@ def load_body(path: str | os.PathLike | None = None, dtype=torch.float32) -> Bod
     arrays = _read_arrays(source)
     model = body_from_arrays(arrays, source, dtype=dtype)
     if "part_labels" in arrays:
-        model.metadata["part_labels"] = np.asarray(arrays["part_labels"]).astype(np.int64)
+        model.metadata["part_labels"] = _part_labels(arrays["part_labels"], model.num_vertices, source)
     return model
+
+
+def _part_labels(labels, num_vertices: int, source) -> np.ndarray:
+    """One body part per vertex: integers indexing ``PART_NAMES``."""
+    labels = require_indices("part_labels", labels, source)
+    if labels.shape != (num_vertices,):
+        raise DartsInputError(source, f"'part_labels' must be {num_vertices} integers (one per vertex), "
+                                      f"found shape {labels.shape}")
+    if labels.size and not (0 <= labels.min() and labels.max() < len(PART_NAMES)):
+        raise DartsInputError(source, f"'part_labels' must lie in 0..{len(PART_NAMES) - 1} (the body parts)")
+    return labels
 
 
 def export_smpl_npz(model: BodyModel, path: str | os.PathLike, betas=None) -> None:

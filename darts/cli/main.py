@@ -8,6 +8,7 @@
     darts template --list
     darts inspect garment.npz [--json] [--png out.png]
     darts export garment.npz -o out.obj|ply|glb
+    darts import mesh.obj|ply|stl|glb|usd -o garment.npz [--category C] [--units mm|cm|m] [--up y|z] [--report r.json] [--png p.png]
 
 MOTION is an AMASS-format .npz, or the name of a shipped motion (walk, run, wave, jumping_jacks,
 twist, squat). Bad input prints one ``darts: error: FILE: problem`` line and exits with code 2.
@@ -28,6 +29,7 @@ from darts.cli.errors import OneLineParser, run_guarded
 from darts.cli.deform import add_parser as add_deform_parser
 from darts.cli.reconstruct import add_parsers as add_reconstruct_parsers
 from darts.cli.garment import add_parsers as add_garment_parsers
+from darts.cli.importer import add_parser as add_import_parser
 from darts.errors import DartsInputError
 from darts.fileio import check_output, save_npz
 from darts.motion.amass import load_motion
@@ -181,6 +183,7 @@ def build_parser() -> argparse.ArgumentParser:
     minfo.add_argument("--json", action="store_true", help="print JSON")
     minfo.set_defaults(run=motion_info)
     add_garment_parsers(groups, _add_body_args)
+    add_import_parser(groups, _add_body_args)
     add_deform_parser(groups)
     add_reconstruct_parsers(groups)
     _add_plugin_parsers(groups)

@@ -3,9 +3,10 @@ lines reach target lines while it stays as rigid as possible and outside the bod
 
 Objective over the vertices p [V,3] (canonical frame, metres), the same for both solvers:
 
-    E(p) = E_arap(p) + w_h sum_k |p_{h_k} - t_k|^2 + w_f sum_i max(0, m - s_i(p))^2 [+ w_s L_sil(p)]
+    E(p) = E_arap(p) + w_h sum_k m_k |p_{h_k} - t_k|^2 + w_f sum_i max(0, m - s_i(p))^2 [+ w_s L_sil(p)]
 
-with E_arap of Eq. 2, t_k the target matched to handle vertex h_k (arc length), s_i the signed
+with E_arap of Eq. 2, t_k the target matched to handle vertex h_k (arc length), m_k its multiplier
+(1 unless given: registration weighs feature lines above the surface pull), s_i the signed
 distance to the fit surface (Eq. 3, body or lower-body hull) and m a margin.
 
 - ``solve_adam``: the paper's way, p a learnable parameter, Adam on E.
@@ -119,14 +120,19 @@ class _SymmetricMap(torch.autograd.Function):
 
 class Crdl:
     """The layer for one template: rest ``vertices`` [V,3], ``faces`` [F,3], handle vertex indices
-    [H] (the feature lines' vertices, in the order of the targets), an optional fit surface."""
+    [H] (the feature lines' vertices, in the order of the targets), an optional fit surface, and
+    optional per-handle multipliers [H] of the handle weight (1 for all by default; a vertex may be
+    a handle more than once, its terms add up)."""
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, handles: np.ndarray,
-                 surface: FitSurface | None = None, weights: CrdlWeights | None = None, silhouette=None):
+                 surface: FitSurface | None = None, weights: CrdlWeights | None = None, silhouette=None,
+                 handle_weights: np.ndarray | None = None):
         self.weights = weights or CrdlWeights()
         self.system = arap_system(vertices, faces)
         self.faces = np.asarray(faces, np.int64)
         self.handles = torch.as_tensor(np.asarray(handles, np.int64))
+        multipliers = np.ones(len(handles)) if handle_weights is None else np.asarray(handle_weights, np.float64)
+        self._handle_multipliers = torch.as_tensor(multipliers)[:, None]
         self.surface = surface
         self.silhouette = None if silhouette is None else silhouette.bind(faces)
         count = self.system.vertex_count
@@ -136,7 +142,7 @@ class Crdl:
         # The silhouette term enters as a proximal-gradient step: its gradient at p_k plus
         # (1/tau) |p - p_k|^2, which keeps the matrix constant.
         self._proximal = SILHOUETTE_PROXIMAL if self._uses_silhouette() else 0.0
-        self._matrix = (self.system.laplacian() + self.weights.handle * (selector.T @ selector)
+        self._matrix = (self.system.laplacian() + self.weights.handle * (selector.T @ sp.diags(multipliers) @ selector)
                         + self._proximal * sp.identity(count)).tocsc()
         # Symmetric positive definite: no pivoting, minimum-degree ordering on A + A^T. The 3V x 3V
         # matrices of the contact rounds have the graph of A with every vertex tripled, so A's
@@ -172,7 +178,7 @@ class Crdl:
                    silhouette: bool) -> torch.Tensor:
         """E(p) without its ARAP term: handles, fit over ``contacts``, silhouette if asked."""
         w = self.weights
-        total = w.handle * (vertices[self.handles] - targets).square().sum()
+        total = w.handle * (self._handle_multipliers * (vertices[self.handles] - targets).square()).sum()
         if contacts is not None:
             total = total + w.fit * contacts.deficit(vertices, w.margin).square().sum()
         if silhouette and self._uses_silhouette():
@@ -288,7 +294,7 @@ class Crdl:
         none (or after ``rounds``). A vertex once in contact stays in the set (its term is zero
         while it is clear), so the set only grows and E of every round majorises the next.
         Without ``start`` the first round races two starts (``_race``)."""
-        handle_rhs = torch.zeros_like(self.system.rest).index_add(0, self.handles, self.weights.handle * targets)
+        handle_rhs = torch.zeros_like(self.system.rest).index_add(0, self.handles, self.weights.handle * self._handle_multipliers * targets)
         round_tolerance = max(tolerance, ROUND_TOLERANCE) if self.surface is not None else tolerance
         if start is None:
             p, history, in_contact, spent = self._race(targets, handle_rhs, iterations, round_tolerance)

@@ -26,7 +26,7 @@ def read_mask(path: str | os.PathLike, width: int, height: int, of: str = "the c
             grey = np.asarray(image.convert("L"), np.float64) / 255.0
     except FileNotFoundError:
         raise DartsInputError(path, "no such file") from None
-    except (UnidentifiedImageError, OSError) as exc:
+    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:  # PIL's errors for damaged files
         raise DartsInputError(path, f"not an image ({exc})") from None
     if grey.shape != (height, width):
         raise DartsInputError(path, f"the mask is {grey.shape[1]}x{grey.shape[0]} pixels but {of} is {width}x{height}")

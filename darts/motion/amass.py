@@ -91,7 +91,7 @@ def _frame_rate(arrays: dict, path) -> float:
         if key in arrays:
             value = np.asarray(arrays[key])
             if value.size != 1 or value.dtype.kind not in "fiu":
-                raise DartsInputError(path, f"'{key}' must be one number, found {value!r}")
+                raise DartsInputError(path, f"'{key}' must be one number, found {value.dtype} values of shape {value.shape}")
             fps = float(value.reshape(()))
             if not np.isfinite(fps) or fps <= 0:
                 raise DartsInputError(path, f"frame rate '{key}' must be positive, found {fps}")

@@ -178,10 +178,11 @@ def _add_ease(vertices, faces, body_vertices, body_faces, ease: float):
     return vertices
 
 
-def _name_lines(category: Category, vertices: np.ndarray, faces: np.ndarray) -> dict[str, np.ndarray]:
-    loops = boundary_loops(faces)
-    if len(loops) != len(category.line_names):
-        raise RuntimeError(f"{category.id}: expected {len(category.line_names)} boundary loops, got {len(loops)}")
+def name_loops(category: Category, vertices: np.ndarray, loops: list[np.ndarray]) -> dict[str, np.ndarray]:
+    """The category's feature lines among ``loops`` (one per line name), named by where their
+    centres sit in the canonical frame (Y up, left +X): cuffs leftmost and rightmost, then the
+    neckline highest and the hem lowest (tops, dresses); the waist highest, then the leg hems
+    left and right (pants); the waist above the hem (skirts)."""
     centre = {k: vertices[loop].mean(0) for k, loop in enumerate(loops)}
     remaining = set(centre)
 
@@ -204,6 +205,13 @@ def _name_lines(category: Category, vertices: np.ndarray, faces: np.ndarray) -> 
         lines["waist"] = take(lambda k: centre[k][1])
         lines["hem"] = take(lambda k: -centre[k][1])
     return lines
+
+
+def _name_lines(category: Category, vertices: np.ndarray, faces: np.ndarray) -> dict[str, np.ndarray]:
+    loops = boundary_loops(faces)
+    if len(loops) != len(category.line_names):
+        raise RuntimeError(f"{category.id}: expected {len(category.line_names)} boundary loops, got {len(loops)}")
+    return name_loops(category, vertices, loops)
 
 
 def build_template(category_id: str, body: BodyModel, betas=None, edge_length: float = DEFAULT_EDGE_LENGTH,

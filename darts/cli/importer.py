@@ -1,0 +1,111 @@
+"""``darts import``: a garment mesh made elsewhere (OBJ, PLY, STL, glTF, USD) as a DART."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from darts.errors import DartsInputError
+from darts.fileio import atomic_path, check_input_file, check_output
+from darts.meshimport.read import UNITS
+from darts.templates.categories import CATEGORIES
+
+
+def parse_transform(text: str) -> np.ndarray:
+    """A 4x4 affine (column vectors: x' = M x) from 16 comma-separated numbers, row by row, or from
+    a text file of 4 rows of 4; refused unless finite, with last row 0 0 0 1 and det > 0."""
+    source = None
+    if "," in text:
+        try:
+            values = np.array([float(v) for v in text.split(",")])
+        except ValueError:
+            raise DartsInputError(None, f"--transform: not 16 numbers: {text!r}") from None
+    else:
+        source = check_input_file(text, "transform file")
+        try:
+            values = np.loadtxt(source, ndmin=2)
+        except ValueError as exc:
+            raise DartsInputError(source, f"not 4 rows of 4 numbers ({exc})") from None
+    if values.size != 16 or not np.isfinite(values).all():
+        raise DartsInputError(source, "--transform must be 16 finite numbers (a 4x4, row by row)")
+    matrix = values.reshape(4, 4)
+    if not np.allclose(matrix[3], [0, 0, 0, 1]) or np.linalg.det(matrix[:3, :3]) <= 0:
+        raise DartsInputError(source, "--transform must be an affine 4x4 (last row 0 0 0 1) that keeps orientation")
+    return matrix
+
+
+def render_import_png(result, path) -> None:
+    """Before (the mesh as placed on the body, grey) and after (the DART, panels coloured), front."""
+    from matplotlib.figure import Figure
+
+    from darts.dart.export import panel_colors
+    from darts.render import FRONT, SIDE, draw_mesh
+
+    dart = result.dart
+    fig = Figure(figsize=(12, 6))
+    axes = fig.subplots(1, 4)
+    grey = np.full((len(result.faces), 3), 0.75)
+    panels = panel_colors(len(dart.panel_names))[dart.panel]
+    for ax, (vertices, faces, colors, title), (right, up) in zip(
+            axes, [(result.placed_vertices, result.faces, grey, "imported mesh")] * 2
+            + [(dart.vertices.astype(np.float64), dart.faces, panels, f"DART ({dart.category})")] * 2,
+            [FRONT, SIDE, FRONT, SIDE]):
+        draw_mesh(ax, vertices, faces, colors, right, up, two_sided=True)
+        ax.set_title(title, fontsize=10)
+    span = 1.05 * max(max(np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim())) for ax in axes)
+    for ax in axes:  # one scale for every view
+        ax.set_xlim(np.mean(ax.get_xlim()) - span / 2, np.mean(ax.get_xlim()) + span / 2)
+        ax.set_ylim(np.mean(ax.get_ylim()) - span / 2, np.mean(ax.get_ylim()) + span / 2)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=90, bbox_inches="tight", format="png")
+
+
+def import_mesh(args) -> int:
+    from darts.dart.io import save_dart
+    from darts.meshimport.pipeline import ImportOptions, import_garment
+
+    check_output(args.output, (".npz",))
+    if args.report:
+        check_output(args.report, (".json",))
+    if args.png:
+        check_output(args.png, (".png",))
+    transform = None if args.transform is None else parse_transform(args.transform)
+    options = ImportOptions(args.category, args.units, args.up, args.prim, transform, args.body, args.betas)
+    quiet = args.quiet
+    result = import_garment(args.mesh, options, progress=None if quiet else lambda text: print(f"darts import: {text}"))
+    save_dart(result.dart, args.output)
+    if args.report:
+        with atomic_path(args.report) as tmp:
+            Path(tmp).write_text(json.dumps(result.report, indent=1))
+    if args.png:
+        render_import_png(result, args.png)
+    report = result.report
+    print(f"wrote {args.output}: {report['category']}, {len(result.dart.vertices)} vertices; surface distance "
+          f"mean {report['dart_to_mesh']['mean_mm']:.2f} mm (DART to mesh) / {report['mesh_to_dart']['mean_mm']:.2f} mm "
+          f"(mesh to DART), feature lines within {max(v['max_mm'] for v in report['feature_lines'].values()):.1f} mm, "
+          f"{100 * report['inside_body']:.2f} % of vertices inside the body")
+    return 0
+
+
+def add_parser(groups, add_body_args) -> None:
+    """Register ``darts import``."""
+    parser = groups.add_parser(
+        "import", help="make a DART from a garment mesh (OBJ, PLY, STL, GLB/GLTF, USD)",
+        description="Read a garment mesh made elsewhere, place it on the body, name its openings as feature lines "
+                    "and register the category's template onto it with the CRDL: the result keeps the template's "
+                    "panels, seams and regimes.")
+    parser.add_argument("mesh", metavar="MESH", help="a .obj, .ply, .stl, .glb, .gltf or .usd/.usda/.usdc/.usdz file")
+    parser.add_argument("-o", "--output", required=True, metavar="OUT.npz", help="the DART")
+    parser.add_argument("--category", choices=sorted(CATEGORIES), help="default: guessed from the openings")
+    parser.add_argument("--units", choices=sorted(UNITS), help="the file's unit (default: what the file says, else guessed)")
+    parser.add_argument("--up", choices=("y", "z"), help="the file's up axis (default: what the file says, else y)")
+    parser.add_argument("--prim", metavar="PATH", help="the USD mesh prim (default: the first mesh)")
+    parser.add_argument("--transform", metavar="M", help="4x4 from the file's points to the DART's frame (Y up, metres): "
+                                                         "16 comma-separated numbers row by row, or a text file; "
+                                                         "replaces the alignment")
+    parser.add_argument("--report", metavar="REPORT.json", help="category, transform, surface distances, line residuals")
+    parser.add_argument("--png", metavar="OUT.png", help="before/after picture")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_body_args(parser)
+    parser.set_defaults(run=import_mesh)

@@ -1,0 +1,159 @@
+"""Placing an imported garment on the body: the similarity x -> s R x + t (canonical frame, Y up,
+metres) that puts the mesh's openings where the category template's feature lines are.
+
+1. For each start (the mesh turned by 0, 90, 180 and 270 degrees about the vertical), the mesh's
+   boundary loops are named as the template's are (``name_loops``) and matched point to point to
+   the template's lines by arc length; Umeyama's closed form on those pairs gives s, R, t.
+2. Iterative closest points refine it: mesh points paired with their closest points on the
+   template surface, the loop pairs (weight ``LOOP_WEIGHT`` per point), and points that land in
+   or near the body paired with their place ``CLEARANCE`` outside it (``BODY_WEIGHT``), Umeyama
+   again: the placement keeps the garment outside the body.
+3. The start with the smallest mean two-way surface distance wins.
+The scale is kept within ``SCALE_RANGE``; a mesh that needs more was modelled in other units.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from darts.crdl.targets import correspond
+from darts.geometry.distance import SurfaceDistance
+from darts.geometry.loops import resample_loop
+from darts.templates.build import name_loops
+from darts.templates.categories import Category
+
+SCALE_RANGE = (0.5, 2.0)
+LOOP_SAMPLES = 48
+#: Weight of one loop point against one surface point in the refinement.
+LOOP_WEIGHT = 4.0
+#: Weight of a point within CLEARANCE of the body (paired with its place CLEARANCE outside).
+BODY_WEIGHT = 1000.0
+CLEARANCE = 0.002
+ICP_ITERATIONS = 15
+#: Iterations between re-pairings of the loops (arc-length matching is the costly part).
+PAIRING_INTERVAL = 5
+SURFACE_SAMPLES = 3000
+
+
+@dataclass
+class Alignment:
+    """``matrix`` [4,4] (canonical mesh -> on the body), the mesh's loops by line name, and the mean
+    two-way surface distance (metres) between the placed mesh and the template."""
+
+    matrix: np.ndarray
+    lines: dict[str, np.ndarray]
+    distance: float
+    scale: float
+
+
+def umeyama(source: np.ndarray, target: np.ndarray, weights: np.ndarray | None = None,
+            scale_range: tuple[float, float] = SCALE_RANGE) -> tuple[float, np.ndarray, np.ndarray]:
+    """(s, R, t) minimising sum_i w_i |s R x_i + t - y_i|^2 (Umeyama 1991): R by weighted Kabsch
+    on the centred points, s = sum w (R x_c).y_c / sum w |x_c|^2 clipped to ``scale_range``,
+    t = mean(y) - s R mean(x)."""
+    w = np.ones(len(source)) if weights is None else np.asarray(weights, np.float64)
+    w = w / w.sum()
+    mean_x, mean_y = w @ source, w @ target
+    xc, yc = source - mean_x, target - mean_y
+    rotation, _ = Rotation.align_vectors(yc, xc, weights=w)
+    turned = rotation.apply(xc)
+    scale = float(np.clip((w * (turned * yc).sum(1)).sum() / (w * (xc * xc).sum(1)).sum(), *scale_range))
+    matrix = rotation.as_matrix()
+    return scale, matrix, mean_y - scale * matrix @ mean_x
+
+
+def _matrix(scale: float, rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = scale * rotation, translation
+    return out
+
+
+def _apply(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
+    return points @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def _loop_pairs(vertices, lines, template_vertices, template_lines) -> tuple[np.ndarray, np.ndarray]:
+    """Mesh loop points and the template line points they match (arc length, best start)."""
+    sources, targets = [], []
+    centre = vertices.mean(0)
+    for name, loop in lines.items():
+        template = resample_loop(template_vertices[template_lines[name]], LOOP_SAMPLES, centre)
+        points = resample_loop(vertices[loop], LOOP_SAMPLES, centre)
+        match = correspond(template, points, shifts=LOOP_SAMPLES)
+        sources.append((1 - match.weight)[:, None] * points[match.first] + match.weight[:, None] * points[match.second])
+        targets.append(template)
+    return np.concatenate(sources), np.concatenate(targets)
+
+
+def _sample(points: np.ndarray, rng) -> np.ndarray:
+    """At most SURFACE_SAMPLES of ``points``, drawn without replacement."""
+    return points[rng.choice(len(points), min(SURFACE_SAMPLES, len(points)), replace=False)]
+
+
+def _yaw(degrees: float, about: np.ndarray) -> np.ndarray:
+    matrix = np.eye(4)
+    matrix[:3, :3] = Rotation.from_euler("y", degrees, degrees=True).as_matrix()
+    matrix[:3, 3] = about - matrix[:3, :3] @ about
+    return matrix
+
+
+def _inside_pairs(fit, points: np.ndarray, placed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ``points`` whose placement lies within ``CLEARANCE`` of the body (or inside it), and the
+    places ``CLEARANCE`` outside it they are paired with."""
+    signed, closest, normal = fit.query(placed, winding=False)
+    near = signed < CLEARANCE
+    return points[near], closest[near] + CLEARANCE * normal[near]
+
+
+def align_to_template(vertices: np.ndarray, faces: np.ndarray, loops: list[np.ndarray], category: Category,
+                      template_vertices: np.ndarray, template_faces: np.ndarray,
+                      template_lines: dict[str, np.ndarray], fit, seed: int = 0) -> Alignment:
+    """The best similarity placing the mesh (canonical frame, its ``loops`` one per line of
+    ``category``) on the template (welded vertices, faces, lines) and outside ``fit`` (the
+    body's FitSurface); see the module docstring."""
+    template_surface = SurfaceDistance(template_vertices, template_faces)
+    rng = np.random.default_rng(seed)
+    sample, template_sample = _sample(vertices, rng), _sample(template_vertices, rng)
+    best = None
+    for degrees in (0.0, 90.0, 180.0, 270.0):
+        start = _yaw(degrees, vertices.mean(0))
+        turned, turned_sample = _apply(start, vertices), _apply(start, sample)
+        lines = name_loops(category, turned, loops)
+        s, r, t = umeyama(*_loop_pairs(turned, lines, template_vertices, template_lines))
+        for step in range(ICP_ITERATIONS):  # every fit from the turned mesh, so the scale stays in range
+            placed = _matrix(s, r, t)
+            _, closest, _ = template_surface.query(_apply(placed, turned_sample), winding=False)
+            if step % PAIRING_INTERVAL == 0:
+                loop_source, loop_target = _loop_pairs(_apply(placed, turned), lines, template_vertices, template_lines)
+                loop_source = _apply(np.linalg.inv(placed), loop_source)
+            inside, outside = _inside_pairs(fit, turned_sample, _apply(placed, turned_sample))
+            weights = np.r_[np.ones(len(turned_sample)), np.full(len(loop_source), LOOP_WEIGHT),
+                            np.full(len(inside), BODY_WEIGHT)]
+            s, r, t = umeyama(np.r_[turned_sample, loop_source, inside], np.r_[closest, loop_target, outside], weights)
+        matrix = _matrix(s, r, t) @ start
+        distance = _two_way_distance(_apply(matrix, sample), template_surface, template_sample,
+                                     SurfaceDistance(_apply(matrix, vertices), faces))
+        if best is None or distance < best.distance:
+            best = Alignment(matrix, lines, distance, s)
+    return best
+
+
+def _two_way_distance(placed_sample, template_surface, template_sample, placed_surface) -> float:
+    """Mean of the mesh-to-template and template-to-mesh point-to-surface distances (metres)."""
+    there, _, _ = template_surface.query(placed_sample, winding=False)
+    back, _, _ = placed_surface.query(template_sample, winding=False)
+    return 0.5 * float(np.abs(there).mean() + np.abs(back).mean())
+
+
+def naming_only(vertices: np.ndarray, faces: np.ndarray, loops: list[np.ndarray], category: Category,
+                matrix: np.ndarray, template, seed: int = 0) -> Alignment:
+    """The placement ``matrix`` as given (``--transform``): loops named where it puts them, and its
+    distance to the ``template`` (a WeldedGarment) measured as ``align_to_template`` does."""
+    rng = np.random.default_rng(seed)
+    placed = _apply(matrix, vertices)
+    sample, template_sample = _sample(placed, rng), _sample(template.vertices, rng)
+    distance = _two_way_distance(sample, SurfaceDistance(template.vertices, template.faces), template_sample,
+                                 SurfaceDistance(placed, faces))
+    return Alignment(matrix, name_loops(category, placed, loops), distance, float(np.cbrt(np.linalg.det(matrix[:3, :3]))))

@@ -1,0 +1,123 @@
+"""A garment mesh made elsewhere as a DART: read, repair, place on the body, name its openings,
+register the category template onto it (``darts import``).
+
+Frames: the file's points as stored -> (``SourceMesh.to_canonical``: units, up axis, a USD prim's
+transform) canonical frame, Y up, metres -> (the alignment, or ``--transform``) on the body. The
+report's ``transform`` is the product: the file's points straight to the DART's frame.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from darts.errors import DartsInputError
+from darts.meshimport.read import read_garment_mesh
+from darts.meshimport.repair import repair_garment_mesh
+from darts.templates.categories import CATEGORIES
+
+#: Largest extent (metres) a garment may have once read; beyond, the units are wrong.
+GARMENT_EXTENT = (0.05, 3.0)
+
+
+@dataclass
+class ImportOptions:
+    """What ``darts import`` may be told: the category, units, up axis, USD prim, an explicit 4x4
+    (file -> DART frame, replacing the alignment), the body and its shape."""
+
+    category: str | None = None
+    units: str | None = None
+    up: str | None = None
+    prim: str | None = None
+    transform: np.ndarray | None = None
+    body: str | os.PathLike | None = None
+    betas: list[float] | None = field(default=None)
+
+
+@dataclass
+class ImportResult:
+    """The DART, the report, and the mesh as placed on the body (canonical frame) it was fitted to."""
+
+    dart: object
+    report: dict
+    placed_vertices: np.ndarray
+    faces: np.ndarray
+
+
+def _apply(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
+    return points @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def _candidates(path, loops: list, category: str | None) -> list[str]:
+    """The categories whose openings the mesh's ``loops`` can be (one line per loop)."""
+    if category is not None:
+        if category not in CATEGORIES:
+            raise DartsInputError(None, f"unknown category '{category}' (see 'darts template --list')")
+        names = CATEGORIES[category].line_names
+        if len(names) != len(loops):
+            raise DartsInputError(path, f"has {len(loops)} openings, but a {category} has {len(names)} "
+                                        f"({', '.join(names)})")
+        return [category]
+    found = [c.id for c in CATEGORIES.values() if len(c.line_names) == len(loops)]
+    if not found:
+        openings = f"{len(loops)} opening" + ("" if len(loops) == 1 else "s")
+        raise DartsInputError(path, f"has {openings}; garments have 2 (skirts), 3 (pants) or 4 (tops and "
+                                    "dresses): check the mesh's holes")
+    return found
+
+
+def _check_extent(path, vertices: np.ndarray, units_note: str) -> None:
+    extent = float(np.ptp(vertices, axis=0).max())
+    if not GARMENT_EXTENT[0] <= extent <= GARMENT_EXTENT[1]:
+        raise DartsInputError(path, f"is {extent:.3g} m across in metres ({units_note}), not the "
+                                    f"{GARMENT_EXTENT[0]}-{GARMENT_EXTENT[1]} m of a garment: check --units")
+
+
+def import_garment(path: str | os.PathLike, options: ImportOptions | None = None, progress=None) -> ImportResult:
+    """The DART of the mesh file ``path`` and its report; see the module docstring.
+    ``progress(text)`` is told each step."""
+    from darts.body.io import load_body
+    from darts.crdl.deform import fit_surface, weld_garment
+    from darts.dart.build import make_dart
+    from darts.meshimport.align import SCALE_RANGE, align_to_template, naming_only
+    from darts.meshimport.register import register_template
+
+    options = options or ImportOptions()
+    say = progress or (lambda text: None)
+    source = read_garment_mesh(path, options.units, options.up, options.prim)
+    vertices, faces, loops, repairs = repair_garment_mesh(source.vertices, source.faces, path)
+    notes = source.notes + repairs
+    if options.transform is None:
+        _check_extent(path, vertices, source.units_note)
+    candidates = _candidates(path, loops, options.category)
+    body = load_body(options.body)
+
+    tried = {}
+    for category in candidates:
+        say(f"placing on the {category} template")
+        template = make_dart(category, body, options.betas)
+        welded = weld_garment(template)
+        if options.transform is not None:
+            placed = options.transform @ np.linalg.inv(source.to_canonical)
+            alignment = naming_only(vertices, faces, loops, CATEGORIES[category], placed, welded)
+        else:
+            alignment = align_to_template(vertices, faces, loops, CATEGORIES[category], welded.vertices,
+                                          welded.faces, welded.lines, fit_surface(template, body))
+        tried[category] = (alignment, template)
+    category = min(tried, key=lambda c: tried[c][0].distance)
+    alignment, template = tried[category]
+    if options.transform is None and not SCALE_RANGE[0] < alignment.scale < SCALE_RANGE[1]:
+        raise DartsInputError(path, f"would need scaling by {alignment.scale:g} or beyond to fit the body "
+                                    f"(at most {SCALE_RANGE[0]}-{SCALE_RANGE[1]}): check --units")
+    placed = _apply(alignment.matrix, vertices)
+    say(f"registering the {category} template onto the mesh")
+    dart, fit = register_template(template, body, placed, faces, alignment.lines)
+    transform = alignment.matrix @ source.to_canonical
+    report = {"source": os.fspath(path), "category": category,
+              "category_guess": None if options.category else {c: 1e3 * a.distance for c, (a, _) in tried.items()},
+              "transform": transform.tolist(), "scale": alignment.scale,
+              "placement": "--transform" if options.transform is not None else "aligned to the template's openings",
+              "placement_distance_mm": 1e3 * alignment.distance, "notes": notes,
+              "mesh": {"vertices": len(vertices), "faces": len(faces), "openings": len(loops)}, **fit}
+    return ImportResult(dart, report, placed, faces)

@@ -1,0 +1,76 @@
+"""Registering a category template onto an imported garment mesh with the CRDL (non-rigid ICP).
+
+The template (its seams welded) is deformed by the CRDL (``darts.crdl.layer``) with two kinds of
+handle: every feature-line vertex pulled to its arc-length match on the mesh's loop of that name
+(multiplier 1), and every vertex pulled to its closest point on the mesh, moved ``CLEARANCE`` out of the body
+where it lies in or near it (multiplier m_r). Rounds
+r recompute the closest points from the last result, with m_r rising along ``STIFFNESS_SCHEDULE``
+(stiff first, so the template turns and slides as a whole before it follows the surface's detail),
+the fit term keeping it outside the body throughout. The result keeps the template's panels,
+seams, regimes and accessories: it is a full DART in the canonical frame (Y up, metres).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from darts.body.model import BodyModel
+from darts.crdl.deform import fit_surface, handle_targets, weld_garment
+from darts.crdl.layer import Crdl, CrdlWeights
+from darts.dart.model import Dart
+from darts.geometry.distance import SurfaceDistance
+
+#: Multipliers (of the handle weight) of the closest-point pull, one CRDL solve per round.
+STIFFNESS_SCHEDULE = (0.002, 0.01, 0.03, 0.1, 0.3, 0.3)
+#: Metres outside the body (or the skirts' hull) the closest-point targets are kept: the CRDL's margin.
+CLEARANCE = CrdlWeights().margin
+#: Local-global iterations per round.
+ROUND_ITERATIONS = 60
+
+
+def _polyline_distance(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """Distance (metres) of each point [N,3] to the closed polyline ``loop`` [K,3]."""
+    a, b = loop, np.roll(loop, -1, 0)
+    ab = b - a
+    t = np.clip(((points[:, None] - a[None]) * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0, 1)
+    nearest = a[None] + t[..., None] * ab[None]
+    return np.linalg.norm(points[:, None] - nearest, axis=-1).min(1)
+
+
+def _distances(values: np.ndarray) -> dict:
+    values = np.abs(values)
+    return {"mean_mm": 1e3 * float(values.mean()), "p95_mm": 1e3 * float(np.percentile(values, 95)),
+            "max_mm": 1e3 * float(values.max())}
+
+
+def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, faces: np.ndarray,
+                      lines: dict[str, np.ndarray]) -> tuple[Dart, dict]:
+    """The template deformed onto the mesh (``vertices`` [N,3] placed on the body, canonical frame;
+    ``lines``: its loops by the template's line names), and the report: surface distances both ways
+    (``dart_to_mesh``, ``mesh_to_dart``: point to surface, mm), each line's residual (distance of the
+    DART's line vertices to the mesh's loop, mm) and the fraction of vertices inside the body."""
+    garment = weld_garment(template)
+    surface = fit_surface(template, body)
+    mesh = SurfaceDistance(vertices, faces)
+    line_handles, line_points = handle_targets(garment, {name: vertices[loop] for name, loop in lines.items()})
+    line_points = surface.push_out(line_points, CLEARANCE)
+    count = len(garment.vertices)
+    handles = np.concatenate([line_handles, np.arange(count)])
+    points = garment.vertices
+    for multiplier in STIFFNESS_SCHEDULE:
+        layer = Crdl(garment.vertices, garment.faces, handles, surface,
+                     handle_weights=np.r_[np.ones(len(line_handles)), np.full(count, multiplier)])
+        _, closest, _ = mesh.query(points, winding=False)
+        closest = surface.push_out(closest, CLEARANCE)
+        points = layer.solve_local_global(np.concatenate([line_points, closest]), iterations=ROUND_ITERATIONS).vertices
+    if not np.isfinite(points).all():
+        raise RuntimeError("the registration produced non-finite vertices")
+    dart = replace(template, vertices=points[garment.index].astype(np.float32))
+    to_mesh, _, _ = mesh.query(points, winding=False)
+    to_dart, _, _ = SurfaceDistance(points, garment.faces).query(vertices, winding=False)
+    residuals = {name: _distances(_polyline_distance(points[garment.lines[name]], vertices[loop]))
+                 for name, loop in lines.items()}
+    report = {"dart_to_mesh": _distances(to_mesh), "mesh_to_dart": _distances(to_dart),
+              "feature_lines": residuals, "inside_body": surface.inside_fraction(points)}
+    return dart, report
