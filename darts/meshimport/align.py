@@ -8,7 +8,8 @@ metres) that puts the mesh's openings where the category template's feature line
    template surface, the loop pairs (weight ``LOOP_WEIGHT`` per point), and points that land in
    or near the body paired with their place ``CLEARANCE`` outside it (``BODY_WEIGHT``), Umeyama
    again: the placement keeps the garment outside the body.
-3. The start with the smallest mean two-way surface distance wins.
+3. The start with the smallest mean two-way surface distance after a few steps wins and is refined
+   further.
 The scale is kept within ``SCALE_RANGE``; a mesh that needs more was modelled in other units.
 """
 from __future__ import annotations
@@ -32,6 +33,8 @@ LOOP_WEIGHT = 4.0
 BODY_WEIGHT = 1000.0
 CLEARANCE = 0.002
 ICP_ITERATIONS = 15
+#: ICP steps every start gets before the closest one alone goes on.
+SCREEN_ITERATIONS = 5
 #: Iterations between re-pairings of the loops (arc-length matching is the costly part).
 PAIRING_INTERVAL = 5
 SURFACE_SAMPLES = 3000
@@ -107,37 +110,54 @@ def _inside_pairs(fit, points: np.ndarray, placed: np.ndarray) -> tuple[np.ndarr
     return points[near], closest[near] + CLEARANCE * normal[near]
 
 
+def _refine(similarity, turned, turned_sample, lines, template_surface, template_vertices, template_lines, fit,
+            iterations: int):
+    """``iterations`` ICP steps from ``similarity`` (s, R, t) of the turned mesh; every fit is from
+    the turned mesh itself, so the scale stays within its range."""
+    s, r, t = similarity
+    for step in range(iterations):
+        placed = _matrix(s, r, t)
+        _, closest, _ = template_surface.query(_apply(placed, turned_sample), winding=False)
+        if step % PAIRING_INTERVAL == 0:
+            loop_source, loop_target = _loop_pairs(_apply(placed, turned), lines, template_vertices, template_lines)
+            loop_source = _apply(np.linalg.inv(placed), loop_source)
+        inside, outside = _inside_pairs(fit, turned_sample, _apply(placed, turned_sample))
+        weights = np.r_[np.ones(len(turned_sample)), np.full(len(loop_source), LOOP_WEIGHT),
+                        np.full(len(inside), BODY_WEIGHT)]
+        s, r, t = umeyama(np.r_[turned_sample, loop_source, inside], np.r_[closest, loop_target, outside], weights)
+    return s, r, t
+
+
 def align_to_template(vertices: np.ndarray, faces: np.ndarray, loops: list[np.ndarray], category: Category,
                       template_vertices: np.ndarray, template_faces: np.ndarray,
                       template_lines: dict[str, np.ndarray], fit, seed: int = 0) -> Alignment:
     """The best similarity placing the mesh (canonical frame, its ``loops`` one per line of
     ``category``) on the template (welded vertices, faces, lines) and outside ``fit`` (the
-    body's FitSurface); see the module docstring."""
+    body's FitSurface); see the module docstring. Each start gets ``SCREEN_ITERATIONS`` steps;
+    the closest goes on to ``ICP_ITERATIONS``."""
     template_surface = SurfaceDistance(template_vertices, template_faces)
     rng = np.random.default_rng(seed)
     sample, template_sample = _sample(vertices, rng), _sample(template_vertices, rng)
-    best = None
+
+    def placement(start, similarity, lines):
+        matrix = _matrix(*similarity) @ start
+        distance = _two_way_distance(_apply(matrix, sample), template_surface, template_sample,
+                                     SurfaceDistance(_apply(matrix, vertices), faces))
+        return Alignment(matrix, lines, distance, similarity[0])
+
+    screened = []
     for degrees in (0.0, 90.0, 180.0, 270.0):
         start = _yaw(degrees, vertices.mean(0))
         turned, turned_sample = _apply(start, vertices), _apply(start, sample)
         lines = name_loops(category, turned, loops)
-        s, r, t = umeyama(*_loop_pairs(turned, lines, template_vertices, template_lines))
-        for step in range(ICP_ITERATIONS):  # every fit from the turned mesh, so the scale stays in range
-            placed = _matrix(s, r, t)
-            _, closest, _ = template_surface.query(_apply(placed, turned_sample), winding=False)
-            if step % PAIRING_INTERVAL == 0:
-                loop_source, loop_target = _loop_pairs(_apply(placed, turned), lines, template_vertices, template_lines)
-                loop_source = _apply(np.linalg.inv(placed), loop_source)
-            inside, outside = _inside_pairs(fit, turned_sample, _apply(placed, turned_sample))
-            weights = np.r_[np.ones(len(turned_sample)), np.full(len(loop_source), LOOP_WEIGHT),
-                            np.full(len(inside), BODY_WEIGHT)]
-            s, r, t = umeyama(np.r_[turned_sample, loop_source, inside], np.r_[closest, loop_target, outside], weights)
-        matrix = _matrix(s, r, t) @ start
-        distance = _two_way_distance(_apply(matrix, sample), template_surface, template_sample,
-                                     SurfaceDistance(_apply(matrix, vertices), faces))
-        if best is None or distance < best.distance:
-            best = Alignment(matrix, lines, distance, s)
-    return best
+        similarity = umeyama(*_loop_pairs(turned, lines, template_vertices, template_lines))
+        similarity = _refine(similarity, turned, turned_sample, lines, template_surface, template_vertices,
+                             template_lines, fit, SCREEN_ITERATIONS)
+        screened.append((placement(start, similarity, lines), start, similarity, turned, turned_sample))
+    best, start, similarity, turned, turned_sample = min(screened, key=lambda entry: entry[0].distance)
+    similarity = _refine(similarity, turned, turned_sample, best.lines, template_surface, template_vertices,
+                         template_lines, fit, ICP_ITERATIONS - SCREEN_ITERATIONS)
+    return placement(start, similarity, best.lines)
 
 
 def _two_way_distance(placed_sample, template_surface, template_sample, placed_surface) -> float:

@@ -74,12 +74,24 @@ def _check_extent(path, vertices: np.ndarray, units_note: str) -> None:
                                     f"{GARMENT_EXTENT[0]}-{GARMENT_EXTENT[1]} m of a garment: check --units")
 
 
+def _template(category: str, body, options: ImportOptions):
+    """The category's template on the body: the shipped DART when the body is the bundled one at
+    its mean shape (``scripts/make_garments.py`` made it with these defaults), else built."""
+    from darts.dart.build import make_dart
+    from darts.dart.io import load_dart
+    from scenes import GARMENTS_DIR
+
+    shipped = GARMENTS_DIR / f"{category}.npz"
+    if options.body is None and not options.betas and shipped.is_file():
+        return load_dart(shipped)
+    return make_dart(category, body, options.betas)
+
+
 def import_garment(path: str | os.PathLike, options: ImportOptions | None = None, progress=None) -> ImportResult:
     """The DART of the mesh file ``path`` and its report; see the module docstring.
     ``progress(text)`` is told each step."""
     from darts.body.io import load_body
     from darts.crdl.deform import fit_surface, weld_garment
-    from darts.dart.build import make_dart
     from darts.meshimport.align import SCALE_RANGE, align_to_template, naming_only
     from darts.meshimport.register import register_template
 
@@ -96,7 +108,7 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
     tried = {}
     for category in candidates:
         say(f"placing on the {category} template")
-        template = make_dart(category, body, options.betas)
+        template = _template(category, body, options)
         welded = weld_garment(template)
         if options.transform is not None:
             placed = options.transform @ np.linalg.inv(source.to_canonical)
