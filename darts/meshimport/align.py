@@ -73,7 +73,8 @@ def _matrix(scale: float, rotation: np.ndarray, translation: np.ndarray) -> np.n
     return out
 
 
-def _apply(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
+def apply_matrix(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """``points`` [N,3] moved by the 4x4 affine ``matrix`` (column vectors: x' = M x)."""
     return points @ matrix[:3, :3].T + matrix[:3, 3]
 
 
@@ -117,11 +118,11 @@ def _refine(similarity, turned, turned_sample, lines, template_surface, template
     s, r, t = similarity
     for step in range(iterations):
         placed = _matrix(s, r, t)
-        _, closest, _ = template_surface.query(_apply(placed, turned_sample), winding=False)
+        _, closest, _ = template_surface.query(apply_matrix(placed, turned_sample), winding=False)
         if step % PAIRING_INTERVAL == 0:
-            loop_source, loop_target = _loop_pairs(_apply(placed, turned), lines, template_vertices, template_lines)
-            loop_source = _apply(np.linalg.inv(placed), loop_source)
-        inside, outside = _inside_pairs(fit, turned_sample, _apply(placed, turned_sample))
+            loop_source, loop_target = _loop_pairs(apply_matrix(placed, turned), lines, template_vertices, template_lines)
+            loop_source = apply_matrix(np.linalg.inv(placed), loop_source)
+        inside, outside = _inside_pairs(fit, turned_sample, apply_matrix(placed, turned_sample))
         weights = np.r_[np.ones(len(turned_sample)), np.full(len(loop_source), LOOP_WEIGHT),
                         np.full(len(inside), BODY_WEIGHT)]
         s, r, t = umeyama(np.r_[turned_sample, loop_source, inside], np.r_[closest, loop_target, outside], weights)
@@ -141,14 +142,14 @@ def align_to_template(vertices: np.ndarray, faces: np.ndarray, loops: list[np.nd
 
     def placement(start, similarity, lines):
         matrix = _matrix(*similarity) @ start
-        distance = _two_way_distance(_apply(matrix, sample), template_surface, template_sample,
-                                     SurfaceDistance(_apply(matrix, vertices), faces))
+        distance = _two_way_distance(apply_matrix(matrix, sample), template_surface, template_sample,
+                                     SurfaceDistance(apply_matrix(matrix, vertices), faces))
         return Alignment(matrix, lines, distance, similarity[0])
 
     screened = []
     for degrees in (0.0, 90.0, 180.0, 270.0):
         start = _yaw(degrees, vertices.mean(0))
-        turned, turned_sample = _apply(start, vertices), _apply(start, sample)
+        turned, turned_sample = apply_matrix(start, vertices), apply_matrix(start, sample)
         lines = name_loops(category, turned, loops)
         similarity = umeyama(*_loop_pairs(turned, lines, template_vertices, template_lines))
         similarity = _refine(similarity, turned, turned_sample, lines, template_surface, template_vertices,
@@ -172,7 +173,7 @@ def naming_only(vertices: np.ndarray, faces: np.ndarray, loops: list[np.ndarray]
     """The placement ``matrix`` as given (``--transform``): loops named where it puts them, and its
     distance to the ``template`` (a WeldedGarment) measured as ``align_to_template`` does."""
     rng = np.random.default_rng(seed)
-    placed = _apply(matrix, vertices)
+    placed = apply_matrix(matrix, vertices)
     sample, template_sample = _sample(placed, rng), _sample(template.vertices, rng)
     distance = _two_way_distance(sample, SurfaceDistance(template.vertices, template.faces), template_sample,
                                  SurfaceDistance(placed, faces))

@@ -8,7 +8,7 @@ report's ``transform`` is the product: the file's points straight to the DART's 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -32,7 +32,7 @@ class ImportOptions:
     prim: str | None = None
     transform: np.ndarray | None = None
     body: str | os.PathLike | None = None
-    betas: list[float] | None = field(default=None)
+    betas: list[float] | None = None
 
 
 @dataclass
@@ -43,10 +43,6 @@ class ImportResult:
     report: dict
     placed_vertices: np.ndarray
     faces: np.ndarray
-
-
-def _apply(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
-    return points @ matrix[:3, :3].T + matrix[:3, 3]
 
 
 def _candidates(path, loops: list, category: str | None) -> list[str]:
@@ -92,7 +88,7 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
     ``progress(text)`` is told each step."""
     from darts.body.io import load_body
     from darts.crdl.deform import fit_surface, weld_garment
-    from darts.meshimport.align import SCALE_RANGE, align_to_template, naming_only
+    from darts.meshimport.align import SCALE_RANGE, align_to_template, apply_matrix, naming_only
     from darts.meshimport.register import register_template
 
     options = options or ImportOptions()
@@ -122,7 +118,7 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
     if options.transform is None and not SCALE_RANGE[0] < alignment.scale < SCALE_RANGE[1]:
         raise DartsInputError(path, f"would need scaling by {alignment.scale:g} or beyond to fit the body "
                                     f"(at most {SCALE_RANGE[0]}-{SCALE_RANGE[1]}): check --units")
-    placed = _apply(alignment.matrix, vertices)
+    placed = apply_matrix(alignment.matrix, vertices)
     say(f"registering the {category} template onto the mesh")
     dart, fit = register_template(template, body, placed, faces, alignment.lines)
     transform = alignment.matrix @ source.to_canonical
