@@ -53,6 +53,26 @@ class ChumpyArray:
 ChumpyArray.__module__, ChumpyArray.__qualname__ = "chumpy.ch", "Ch"
 
 
+def chumpy_holding_itself() -> ChumpyArray:
+    """A chumpy array whose value is itself (a pickle can hold such a loop)."""
+    array = ChumpyArray(None)
+    array.x = array
+    return array
+
+
+def nested_chumpy(value, depth: int):
+    """``value`` wrapped in ``depth`` chumpy arrays."""
+    for _ in range(depth):
+        value = ChumpyArray(value)
+    return value
+
+
+def npz_arrays(path) -> dict[str, np.ndarray]:
+    """Every array of an ``.npz`` file, by key."""
+    with np.load(path) as archive:
+        return {key: archive[key] for key in archive.files}
+
+
 def legacy_pickle(values: dict) -> bytes:
     """``values`` as the bytes of a legacy SMPL ``.pkl`` (protocol 2), ChumpyArray values pickled
     as chumpy arrays; chumpy is faked only while pickling, so loading runs without it."""

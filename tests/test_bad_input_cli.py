@@ -19,7 +19,7 @@ from darts.body.io import DEFAULT_BODY_PATH as BODY
 from darts.body.io import REQUIRED_KEYS
 from darts.fileio import temporary_prefix
 from scenes import GARMENTS_DIR, MOTIONS_DIR
-from tests.helpers import ChumpyArray, legacy_pickle
+from tests.helpers import chumpy_holding_itself, legacy_pickle, nested_chumpy, npz_arrays
 
 SKIRT = GARMENTS_DIR / "short-skirt.npz"
 SQUAT = MOTIONS_DIR / "squat.npz"
@@ -30,11 +30,6 @@ def _one_line(code, err, *names):
     assert code == 2 and len(lines) == 1 and "error:" in lines[0] and "Traceback" not in err, err
     assert all(str(n) in lines[0] for n in names), lines[0]
     return lines[0]
-
-
-def _arrays(path):
-    with np.load(path) as archive:
-        return {key: archive[key] for key in archive.files}
 
 
 def _patch_zip_headers(path, local_offset, central_offset, change):
@@ -69,7 +64,7 @@ def _huge_member(path, arrays, key):
     ("not npy", "member 'poses.npy' is damaged"),
 ])
 def test_a_damaged_motion_is_one_line(damage, problem, tmp_path, run_sim):
-    arrays, path, out = _arrays(SQUAT), tmp_path / "motion.npz", tmp_path / "out.usdc"
+    arrays, path, out = npz_arrays(SQUAT), tmp_path / "motion.npz", tmp_path / "out.usdc"
     if damage == "huge":
         _huge_member(path, arrays, "trans")
     elif damage in ("no suffix", "lzma", "not npy"):
@@ -105,7 +100,7 @@ def test_a_damaged_motion_is_one_line(damage, problem, tmp_path, run_sim):
     (dict(material_thickness=lambda a: np.array(1e38, a.dtype)), "outside the range of cloth"),
 ])
 def test_a_garment_that_cannot_be_simulated_is_refused_at_the_door(change, problem, tmp_path, run_sim, run_darts):
-    arrays = _arrays(SKIRT)
+    arrays = npz_arrays(SKIRT)
     arrays.update({key: make(arrays[key]) for key, make in change.items()})
     path = tmp_path / "garment.npz"
     np.savez(path, **arrays)
@@ -117,7 +112,7 @@ def test_a_garment_that_cannot_be_simulated_is_refused_at_the_door(change, probl
 
 def test_a_garment_without_vertices_is_refused(tmp_path, run_sim, run_darts):
     """Every per-vertex, per-face, per-line and per-pair array empty, so that each agrees with the next."""
-    arrays = _arrays(SKIRT)
+    arrays = npz_arrays(SKIRT)
     arrays.update(vertices=np.zeros((0, 3), np.float32), faces=np.zeros((0, 3), np.int32), panel=np.zeros(0, np.int32),
                   line_names=np.zeros(0, "<U1"), line_offsets=np.zeros(1, np.int32), line_vertices=np.zeros(0, np.int32),
                   pairs=np.zeros((0, 2), np.int32), pair_seam=np.zeros(0, np.int32),
@@ -131,7 +126,7 @@ def test_a_garment_without_vertices_is_refused(tmp_path, run_sim, run_darts):
 
 
 def test_hull_vertices_without_hull_faces_is_refused(tmp_path, run_darts):
-    arrays = _arrays(SKIRT)
+    arrays = npz_arrays(SKIRT)
     arrays["hull_vertices"] = arrays["vertices"][:10]
     arrays.pop("hull_faces", None)
     np.savez(tmp_path / "g.npz", **arrays)
@@ -148,7 +143,7 @@ def test_sizes_that_would_exhaust_memory_are_refused(args, problem, tmp_path, ru
 
 
 def test_a_motion_at_a_nanohertz_frame_rate_is_refused(tmp_path, run_sim, run_darts):
-    arrays = _arrays(SQUAT)
+    arrays = npz_arrays(SQUAT)
     arrays["mocap_framerate"] = np.array(1e-9)
     np.savez(tmp_path / "slow.npz", **arrays)
     code, _, err = run_sim(SKIRT, tmp_path / "slow.npz", "-o", tmp_path / "o.usdc", "--quiet")
@@ -201,37 +196,24 @@ def test_an_option_error_is_one_line_not_the_usage_block(option, tmp_path, run_s
     (np.array([object(), 1], dtype=object), "'v_template'"),
 ])
 def test_a_body_npz_with_the_wrong_dtype_is_one_line(value, problem, tmp_path, run_darts):
-    arrays = _arrays(BODY)
+    arrays = npz_arrays(BODY)
     arrays["v_template"] = value
     np.savez(tmp_path / "body.npz", **arrays)
     code, _, err = run_darts("body", "info", "--body", tmp_path / "body.npz")
     assert problem in _one_line(code, err, tmp_path / "body.npz")
 
 
-def _holding_itself():
-    array = ChumpyArray(None)
-    array.x = array
-    return array
-
-
 @pytest.mark.parametrize("make, problem", [
-    (_holding_itself, "nested more than"), (lambda: ChumpyArray(_nested(5000)), "nested more than"),
+    (chumpy_holding_itself, "nested more than"), (lambda: nested_chumpy(np.zeros((6890, 3)), 5001), "nested more than"),
     (lambda: {1.0, 2.0}, "found a set"), (lambda: "abc", "found a str"),
 ])
 def test_a_body_pickle_holding_no_array_is_one_line(make, problem, tmp_path, run_darts):
-    arrays = _arrays(BODY)
+    arrays = npz_arrays(BODY)
     legacy = {key: arrays[key] for key in REQUIRED_KEYS}
     legacy["v_template"] = make()
     (tmp_path / "body.pkl").write_bytes(legacy_pickle(legacy))
     code, _, err = run_darts("body", "info", "--body", tmp_path / "body.pkl")
     assert problem in _one_line(code, err, tmp_path / "body.pkl")
-
-
-def _nested(depth):
-    value = np.zeros((6890, 3))
-    for _ in range(depth):
-        value = ChumpyArray(value)
-    return value
 
 
 def test_an_unreadable_file_says_so_not_that_it_is_no_zip(tmp_path, run_darts, monkeypatch):

@@ -25,7 +25,7 @@ from darts.errors import DartsInputError
 from darts.motion.amass import load_motion
 from scenes import GARMENTS_DIR, MOTIONS_DIR
 from sim.batch.spec import load_jobs
-from tests.helpers import ChumpyArray, legacy_pickle
+from tests.helpers import ChumpyArray, chumpy_holding_itself, legacy_pickle, nested_chumpy, npz_arrays
 
 settings.register_profile("ci", max_examples=25, derandomize=True, deadline=None,
                           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
@@ -40,12 +40,7 @@ CAMERA = {"width": 64, "height": 48, "fx": 60.0, "fy": 60.0, "cx": 32.0, "cy": 2
           "rotation": np.eye(3).tolist(), "translation": [0.0, 0.0, 3.0]}
 
 
-def _arrays(path: Path) -> dict[str, np.ndarray]:
-    with np.load(path) as archive:
-        return {key: archive[key] for key in archive.files}
-
-
-_ARRAYS = {source: _arrays(source) for source in (MOTION, GARMENT, DEFAULT_BODY_PATH)}
+_ARRAYS = {source: npz_arrays(source) for source in (MOTION, GARMENT, DEFAULT_BODY_PATH)}
 
 #: Values a mistyped member may hold instead of its own.
 _WRONG_VALUES = st.sampled_from([
@@ -157,19 +152,6 @@ def test_damaged_batch_specs_load_or_name_the_file(data, tmp_path_factory):
     _holds_contract(load_jobs, path)
 
 
-def _holding_itself():
-    array = ChumpyArray(None)
-    array.x = array
-    return array
-
-
-def _nested(depth: int):
-    value = np.zeros(3)
-    for _ in range(depth):
-        value = ChumpyArray(value)
-    return value
-
-
 def _list_holding_itself():
     values = [1.0]
     values.append(values)
@@ -179,7 +161,8 @@ def _list_holding_itself():
 #: Values a legacy SMPL pickle may hold instead of an array (made fresh for each example).
 _PICKLED_VALUES = st.sampled_from([
     lambda: {1, 2}, lambda: "text", lambda: None, lambda: {"x": 1}, lambda: [[1.0, 2.0], [3.0]],
-    _holding_itself, lambda: _nested(5000), lambda: _nested(3), _list_holding_itself,
+    chumpy_holding_itself, lambda: nested_chumpy(np.zeros(3), 5000), lambda: nested_chumpy(np.zeros(3), 3),
+    _list_holding_itself,
     lambda: ChumpyArray(np.array(["a"])), lambda: ChumpyArray(None), lambda: scipy.sparse.csr_matrix((2, 2)),
     lambda: ChumpyArray(np.zeros(3, complex)), lambda: np.array([np.nan]),
 ])

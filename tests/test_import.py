@@ -101,8 +101,8 @@ def test_bad_meshes_are_one_line(case, problem, tmp_path, run_darts):
         cone_skirt_obj(path)
         extra = ["--category", "short-pants"] if case == "category" else ["--units", "m"]
         if case == "100 m":
-            vertices, faces = trimesh.load(path, process=False).vertices, trimesh.load(path, process=False).faces
-            trimesh.Trimesh(vertices * 160, faces, process=False).export(path)
+            cone = trimesh.load(path, process=False)
+            trimesh.Trimesh(cone.vertices * 160, cone.faces, process=False).export(path)
     elif case == "pieces":
         a, b = trimesh.creation.annulus(0.1, 0.3, 0.4), trimesh.creation.annulus(0.1, 0.3, 0.4)
         b.apply_translation([1.0, 0, 0])
