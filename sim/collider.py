@@ -13,6 +13,7 @@ import numpy as np
 
 from darts.geometry.warp_runtime import warp
 from sim import kernels
+from sim.launch import Launcher
 from sim.settings import CCD_MIN_PATH, SimSettings
 from sim.state import int_array, vec3_array
 
@@ -38,6 +39,7 @@ class BodyCollider:
     def __init__(self, body_faces: np.ndarray, body_vertices: np.ndarray, count: int, thickness: float,
                  friction: float, settings: SimSettings):
         device = self.device = settings.device
+        self.launch = Launcher(device)
         self.settings, self.count = settings, count
         self.thickness, self.friction_coefficient = float(thickness), float(friction)
         self.start = vec3_array(body_vertices, device)
@@ -74,9 +76,8 @@ class BodyCollider:
 
     def place(self, weight: float, refit: bool = True) -> None:
         """Body at ``weight`` of the way through the current frame (its BVH refit if ``refit``)."""
-        wp.launch(kernels.body_frame, dim=len(self.points),
-                  inputs=[self.start, self.end, weight, self.settings.fps, self.points, self.velocities],
-                  device=self.device)
+        self.launch(kernels.body_frame, len(self.points),
+                    [self.start, self.end, weight, self.settings.fps, self.points, self.velocities])
         if refit:
             self.mesh.refit()
 
@@ -95,31 +96,30 @@ class BodyCollider:
         if search:
             reach = self.thickness + settings.contact_reach + settings.contact_skin + interval * dt * self.speed
             started = self.time + substep * dt
-            wp.launch(kernels.find_contacts, dim=self.count,
-                      inputs=[self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
-                              CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start,
-                              settings.contact_skin, self.speed, self.query_time, self.query_offset, self.contact.face,
-                              self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
-                              self.second.uv, self.second.local],
-                      device=self.device)
+            self.launch(kernels.find_contacts, self.count,
+                        [self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
+                         CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start,
+                         settings.contact_skin, self.speed, self.query_time, self.query_offset, self.contact.face,
+                         self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
+                         self.second.uv, self.second.local])
             self.window_time = started
         for c in (self.contact, self.second):
-            wp.launch(kernels.track_contacts, dim=self.count,
-                      inputs=[self.mesh.id, c.face, c.uv, c.local, c.point, c.normal, c.velocity], device=self.device)
+            self.launch(kernels.track_contacts, self.count,
+                        [self.mesh.id, c.face, c.uv, c.local, c.point, c.normal, c.velocity])
 
     def resolve(self, x) -> None:
         """Push particles ``thickness`` outside their contact planes (both, in a crease) and above the
         ground, which has the last word; the pushes add up for ``friction``."""
         c, s = self.contact, self.second
-        wp.launch(kernels.resolve_contacts, dim=self.count,
-                  inputs=[x, c.point, c.normal, c.face, s.point, s.normal, s.face, self.thickness,
-                          int(self.settings.ground), 0.0, self.body_push, self.ground_push], device=self.device)
+        self.launch(kernels.resolve_contacts, self.count,
+                    [x, c.point, c.normal, c.face, s.point, s.normal, s.face, self.thickness,
+                     int(self.settings.ground), 0.0, self.body_push, self.ground_push])
 
     def friction(self, x, x_start, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""
-        wp.launch(kernels.apply_friction, dim=self.count,
-                  inputs=[x, x_start, self.contact.normal, self.contact.velocity, self.second.normal,
-                          self.second.face, self.friction_coefficient, dt, self.body_push, self.ground_push], device=self.device)
+        self.launch(kernels.apply_friction, self.count,
+                    [x, x_start, self.contact.normal, self.contact.velocity, self.second.normal,
+                     self.second.face, self.friction_coefficient, dt, self.body_push, self.ground_push])
 
     def contact_depth(self, particle: int, x: np.ndarray) -> float | None:
         """How far (m) ``particle`` at ``x`` [3] is inside its contact's thickness (None: no contact)."""

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
+from sim.launch import Launcher
 
 wp = warp()
 
@@ -75,10 +76,14 @@ def face_normal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), f
 
 @wp.kernel
 def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
-                       x_start: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), reach: float, exclusion: float,
+                       x_start: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
+                       reach: float, mean_velocity: wp.vec3, other_speed: float, lookahead: float, max_speed: float,
+                       exclusion: float,
                        contact_face: wp.array(dtype=wp.int32), contact_bary: wp.array(dtype=wp.vec3),
                        contact_side: wp.array(dtype=float)):
-    """Closest garment triangle within ``reach`` of each particle, facing it, whose corners are all
+    """Closest garment triangle within reach_i = ``reach`` + ``lookahead`` min(|v_i - ``mean_velocity``|
+    + ``other_speed``, ``max_speed``) of each particle (what the particle and a triangle moving at
+    ``other_speed`` can close until the next search), facing it, whose corners are all
     farther than ``exclusion`` from it on the rest garment (-1: none), its barycentrics, and the side of its plane
     the particle must not leave: kept from the last search for the same triangle, else the side it
     was on at the start of the substep (``x_start``, after the last projection)."""
@@ -87,11 +92,14 @@ def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp
     if not wp.isfinite(p):  # a blown-up particle: the run is about to stop; do not walk the BVH
         contact_face[i] = -1
         return
-    r = wp.vec3(reach)
+    radius = reach + lookahead * wp.min(wp.length(v[i] - mean_velocity) + other_speed, max_speed)
+    if not wp.isfinite(radius):
+        radius = reach
+    r = wp.vec3(radius)
     query = wp.mesh_query_aabb(mesh, p - r, p + r)
     face = int(0)
     best = int(-1)
-    best_distance = reach
+    best_distance = radius
     best_bary = wp.vec3(0.0)
     while wp.mesh_query_aabb_next(query, face):
         a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
@@ -373,6 +381,7 @@ class SelfContact:
     def __init__(self, x, rest: np.ndarray, faces: np.ndarray, edges: np.ndarray, separation: float,
                  exclusion: float, device: str):
         self.x, self.device, self.count = x, device, x.shape[0]
+        self.launch = Launcher(device)
         self.separation, self.exclusion = float(separation), float(exclusion)
         self.reach = float(exclusion)
         self.edge_edge = True  # edge-edge contacts too (off only to show what they add)
@@ -394,19 +403,26 @@ class SelfContact:
         self._hits = wp.zeros(self.count, dtype=float, device=device)
         self._crossing = wp.zeros(self.edges.shape[0], dtype=wp.int32, device=device)
 
-    def search(self, x_start, reach: float) -> None:
-        """Refit the garment's BVH to the particles and find each one's closest non-neighbour triangle,
-        and each edge's closest non-neighbour edge (``x_start``: the positions the sides are taken from)."""
+    def search(self, x_start, v, reach: float, lookahead: float, max_speed: float) -> None:
+        """Refit the garment's BVH to the particles and find each one's closest non-neighbour triangle
+        within ``reach`` plus what it and a particle at the garment's median speed (speeds relative to
+        the mean of the velocities ``v`` [P], m/s) travel in ``lookahead`` seconds, and each
+        edge's closest non-neighbour edge within ``reach`` (``x_start``: the positions the sides are
+        taken from); no particle's reach counts more than ``max_speed`` (m/s)."""
         self.reach = float(reach)
         self.mesh.refit()
-        wp.launch(find_self_contacts, dim=self.count,
-                  inputs=[self.mesh.id, self.faces, self.x, x_start, self.rest, reach, self.exclusion, self.face, self.bary,
-                          self.side], device=self.device)
+        velocities = v.numpy()
+        finite = np.isfinite(velocities).all(axis=1)  # a blown-up particle (the run is about to stop) aside
+        mean = velocities[finite].mean(axis=0) if finite.any() else np.zeros(3)
+        speeds = np.linalg.norm(velocities[finite] - mean, axis=1)
+        other = min(float(np.median(speeds)), max_speed) if finite.any() else 0.0
+        self.launch(find_self_contacts, self.count,
+                    [self.mesh.id, self.faces, self.x, x_start, v, self.rest, reach, wp.vec3(*mean), other, lookahead,
+                     max_speed, self.exclusion, self.face, self.bary, self.side])
         if self.edge_edge:
-            wp.launch(find_edge_contacts, dim=self.edges.shape[0],
-                      inputs=[self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,
-                              x_start, self.rest, reach, self.exclusion, self.partner, self.partner_st,
-                              self.partner_side], device=self.device)
+            self.launch(find_edge_contacts, self.edges.shape[0],
+                        [self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,
+                         x_start, self.rest, reach, self.exclusion, self.partner, self.partner_st, self.partner_side])
 
     def resolve(self, inverse_mass, body_push) -> None:
         """One sweep keeping every particle ``separation`` off its triangle and every edge off its
@@ -414,15 +430,14 @@ class SelfContact:
         count ten times heavier), each particle moved by the mean of its corrections."""
         self._delta.zero_()
         self._hits.zero_()
-        wp.launch(resolve_self_contacts, dim=self.count,
-                  inputs=[self.faces, self.face, self.bary, self.side, inverse_mass, body_push, self.separation,
-                          self.reach, self.x, self._delta, self._hits],
-                  device=self.device)
+        self.launch(resolve_self_contacts, self.count,
+                    [self.faces, self.face, self.bary, self.side, inverse_mass, body_push, self.separation,
+                     self.reach, self.x, self._delta, self._hits])
         if self.edge_edge:
-            wp.launch(resolve_edge_contacts, dim=self.edges.shape[0],
-                      inputs=[self.edges, self.partner, self.partner_st, self.partner_side, inverse_mass, body_push,
-                              self.separation, self.reach, self.x, self._delta, self._hits], device=self.device)
-        wp.launch(apply_averaged, dim=self.count, inputs=[self._delta, self._hits, self.x], device=self.device)
+            self.launch(resolve_edge_contacts, self.edges.shape[0],
+                        [self.edges, self.partner, self.partner_st, self.partner_side, inverse_mass, body_push,
+                         self.separation, self.reach, self.x, self._delta, self._hits])
+        self.launch(apply_averaged, self.count, [self._delta, self._hits, self.x])
 
     def crossing_edges(self) -> np.ndarray:
         """Mask [E] of the garment edges that pass through a garment triangle right now."""

@@ -34,7 +34,10 @@ class SimSettings:
     contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
     contact_interval: int = 1  # substeps between the body's closest-point searches
     contact_skin: float = 0.005  # m a particle moves (relative to its contact) before it is searched again; 0: always
-    self_contact_interval: int = 2  # substeps between the garment's self-contact searches
+    self_contact_interval: int = 4  # substeps between the garment's self-contact searches
+    # m searched beyond the separation for the garment's self-contacts, plus what each particle and the
+    # garment's fast particles travel until the next search (``SelfContact.search``)
+    self_contact_reach: float = 0.002
     max_body_speed: float = 5.0  # m/s the search reach allows for at least (more when the body is faster)
     max_speed: float = 50.0  # m/s; faster means the run has blown up
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep
@@ -53,7 +56,7 @@ class SimSettings:
         if self.solver not in solver_names():
             raise ValueError(f"unknown solver '{self.solver}' (one of {', '.join(solver_names())})")
         finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
-                                               self.damping, self.contact_reach, self.contact_skin, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
+                                               self.damping, self.contact_reach, self.self_contact_reach, self.contact_skin, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
         if not finite:
             raise ValueError("settings must be finite numbers")
         rules = [
@@ -66,7 +69,8 @@ class SimSettings:
             (0 <= self.gust <= 1, f"gust must be in [0, 1], got {self.gust}"),
             (self.air_density >= 0 and self.drag_coefficient >= 0, "air density and drag must be >= 0"),
             (self.damping >= 0, f"damping must be >= 0, got {self.damping}"),
-            (self.contact_reach > 0 and self.max_speed > 0, "contact reach and max speed must be > 0"),
+            (self.contact_reach > 0 and self.self_contact_reach > 0 and self.max_speed > 0,
+             "contact reaches and max speed must be > 0"),
             (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),
         ]
         for ok, message in rules:

@@ -13,6 +13,7 @@ import numpy as np
 from darts.geometry.warp_runtime import warp
 from sim import kernels
 from sim.collider import BodyCollider
+from sim.launch import Launcher
 from sim.model import ClothModel
 from sim.self_contact import SelfContact
 from sim.settings import SimSettings
@@ -50,6 +51,7 @@ class Solver:
     def __init__(self, model: ClothModel, state: ClothState, settings: SimSettings):
         self.model, self.settings = model, settings
         self.device = device = settings.device
+        self.launch = Launcher(device)
         self.count = len(model.rest)
         self.mass = float_array(model.mass, device)
         self.inverse_mass = float_array(1.0 / model.mass, device)
@@ -59,7 +61,7 @@ class Solver:
         thickness = float(model.material["thickness"])
         self.self_contact = SelfContact(
             state.x, model.rest, model.faces, model.edges, SELF_SEPARATION * thickness,
-            max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * thickness + settings.contact_reach),
+            max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * thickness + settings.self_contact_reach),
             device)
         self.damping = float(np.exp(-settings.damping / (settings.fps * settings.substeps)))  # per substep
 
@@ -72,9 +74,9 @@ class Solver:
         """force <- wind and air drag on every face (zero when the air density is 0)."""
         self.force.zero_()
         if self.settings.air_density > 0:
-            wp.launch(kernels.aerodynamic_forces, dim=len(self.model.faces),
-                      inputs=[self.faces, state.x, state.v, wp.vec3(*self.wind.at(time)), self.settings.air_density,
-                              self.settings.drag_coefficient, self.force], device=self.device)
+            self.launch(kernels.aerodynamic_forces, len(self.model.faces),
+                        [self.faces, state.x, state.v, wp.vec3(*self.wind.at(time)), self.settings.air_density,
+                         self.settings.drag_coefficient, self.force])
 
     def find_contacts(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float,
                       substep: int) -> None:
@@ -82,7 +84,8 @@ class Solver:
         ``self_contact_interval`` substeps, the garment's self-contacts."""
         collider.update(state_out.x, state_in.x, substep, dt)
         if self.settings.self_contact and substep % self.settings.self_contact_interval == 0:
-            self.self_contact.search(state_in.x, self.self_contact.separation + self.settings.contact_reach)
+            self.self_contact.search(state_in.x, state_in.v, self.self_contact.separation + self.settings.self_contact_reach,
+                                     self.settings.self_contact_interval * dt, self.settings.max_speed)
 
     def resolve_contacts(self, state: ClothState, collider: BodyCollider) -> None:
         """Keep particles off the garment's own triangles (layers the body has pushed this substep
@@ -95,5 +98,4 @@ class Solver:
     def finish(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float) -> None:
         """Friction for the substep's contact pushes, then v = (x_out - x_in) / dt."""
         collider.friction(state_out.x, state_in.x, dt)
-        wp.launch(kernels.velocities_from_positions, dim=self.count, inputs=[state_out.x, state_in.x, dt, state_out.v],
-                  device=self.device)
+        self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])

@@ -191,44 +191,37 @@ class MassSpringSolver(Solver):
         self.dv, self.residual, self.z, self.direction, self.product = (
             wp.zeros(n, dtype=wp.vec3, device=device) for _ in range(5))
         self.scalars = wp.zeros(2 * settings.cg_iterations + 1, dtype=float, device=device)  # r.z, p.Ap, ...
+        self.scalar = [self.scalars[k:k + 1] for k in range(len(self.scalars))]  # one view each, made once
 
     def _stiffness_product(self, p, scale: float, mass_scale: float) -> None:
         """product = mass_scale M p + scale H p."""
-        wp.launch(mass_times, dim=self.count, inputs=[self.mass, mass_scale, p, self.product], device=self.device)
-        wp.launch(add_spring_product, dim=self.pairs.shape[0], inputs=[self.pairs, self.blocks, scale, p, self.product],
-                  device=self.device)
-        wp.launch(add_hinge_product, dim=self.hinges.shape[0],
-                  inputs=[self.hinges, self.gradients, self.kappa, scale, p, self.product], device=self.device)
+        self.launch(mass_times, self.count, [self.mass, mass_scale, p, self.product])
+        self.launch(add_spring_product, self.pairs.shape[0], [self.pairs, self.blocks, scale, p, self.product])
+        self.launch(add_hinge_product, self.hinges.shape[0], [self.hinges, self.gradients, self.kappa, scale, p, self.product])
 
     def step(self, state_in, state_out, collider, dt, time, substep):
-        device, h2 = self.device, dt * dt
+        h2 = dt * dt
         self.external_forces(state_in, time)
         self.diagonal.zero_()
         self.scalars.zero_()
-        wp.launch(spring_forces, dim=self.pairs.shape[0],
-                  inputs=[self.pairs, self.rest, self.stiffness, state_in.x, self.force, self.blocks, self.diagonal],
-                  device=device)
-        wp.launch(hinge_forces, dim=self.hinges.shape[0],
-                  inputs=[self.hinges, self.rest_angle, self.kappa, state_in.x, self.force, self.gradients,
-                          self.diagonal], device=device)
-        wp.launch(gravity_guess, dim=self.count, inputs=[state_in.v, wp.vec3(*self.settings.gravity), dt, self.dv, self.z],
-                  device=device)
+        self.launch(spring_forces, self.pairs.shape[0],
+                    [self.pairs, self.rest, self.stiffness, state_in.x, self.force, self.blocks, self.diagonal])
+        self.launch(hinge_forces, self.hinges.shape[0],
+                    [self.hinges, self.rest_angle, self.kappa, state_in.x, self.force, self.gradients, self.diagonal])
+        self.launch(gravity_guess, self.count, [state_in.v, wp.vec3(*self.settings.gravity), dt, self.dv, self.z])
         self._stiffness_product(self.z, h2, 0.0)  # h^2 H (v + dv0)
-        rz = self.scalars[0:1]
-        wp.launch(start_solve, dim=self.count,
-                  inputs=[self.force, dt, self.product, self.mass, self.diagonal, h2, self.residual, self.z,
-                          self.direction, rz], device=device)
+        rz = self.scalar[0]
+        self.launch(start_solve, self.count, [self.force, dt, self.product, self.mass, self.diagonal, h2, self.residual,
+                                              self.z, self.direction, rz])
         for k in range(self.settings.cg_iterations):
-            p_ap, rz_next = self.scalars[2 * k + 1:2 * k + 2], self.scalars[2 * k + 2:2 * k + 3]
+            p_ap, rz_next = self.scalar[2 * k + 1], self.scalar[2 * k + 2]
             self._stiffness_product(self.direction, h2, 1.0)
-            wp.launch(dot_into, dim=self.count, inputs=[self.direction, self.product, p_ap], device=device)
-            wp.launch(cg_update, dim=self.count,
-                      inputs=[self.direction, self.product, rz, p_ap, self.mass, self.diagonal, h2, self.dv,
-                              self.residual, self.z, rz_next], device=device)
-            wp.launch(cg_direction, dim=self.count, inputs=[self.z, rz, rz_next, self.direction], device=device)
+            self.launch(dot_into, self.count, [self.direction, self.product, p_ap])
+            self.launch(cg_update, self.count, [self.direction, self.product, rz, p_ap, self.mass, self.diagonal, h2,
+                                                self.dv, self.residual, self.z, rz_next])
+            self.launch(cg_direction, self.count, [self.z, rz, rz_next, self.direction])
             rz = rz_next
-        wp.launch(advance, dim=self.count, inputs=[state_in.x, state_in.v, self.dv, dt, self.damping, state_out.x,
-                                                   state_out.v], device=device)
+        self.launch(advance, self.count, [state_in.x, state_in.v, self.dv, dt, self.damping, state_out.x, state_out.v])
         self.find_contacts(state_in, state_out, collider, dt, substep)
         self.resolve_contacts(state_out, collider)
         self.finish(state_in, state_out, collider, dt)

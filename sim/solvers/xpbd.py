@@ -13,6 +13,7 @@ import numpy as np
 from darts.geometry.warp_runtime import warp
 from sim import kernels
 from sim.coloring import color_order
+from sim.launch import Launcher
 from sim.solvers.base import Solver, hinge_stiffness
 from sim.tethers import tethers
 from sim.state import float_array, int_array
@@ -26,6 +27,7 @@ class ColoredConstraints:
     def __init__(self, members: np.ndarray, fields: dict[str, np.ndarray], particle_count: int, device: str):
         order, self.offsets = color_order(members, particle_count)
         self.device = device
+        self._launch = Launcher(device)
         self.count = len(members)
         members = np.asarray(members, np.int64)
         self.members = int_array(members.reshape(len(members), members.shape[1] if members.ndim == 2 else 1)[order], device)
@@ -42,8 +44,7 @@ class ColoredConstraints:
             return
         spans = [(0, self.count)] if self.device == "cpu" else zip(self.offsets[:-1], self.offsets[1:])
         for start, end in spans:
-            wp.launch(kernel, dim=int(end - start), inputs=[int(start), self.members, *fields, *state],
-                      device=self.device)
+            self._launch(kernel, int(end - start), [int(start), self.members, *fields, *state])
 
 
 def _compliance(stiffness: np.ndarray) -> np.ndarray:
@@ -79,9 +80,9 @@ class XpbdSolver(Solver):
 
     def step(self, state_in, state_out, collider, dt, time, substep):
         self.external_forces(state_in, time)
-        wp.launch(kernels.predict, dim=self.count,
-                  inputs=[state_in.x, state_in.v, self.force, self.inverse_mass, wp.vec3(*self.settings.gravity), dt,
-                          self.damping, state_out.x, state_out.v], device=self.device)
+        self.launch(kernels.predict, self.count, [state_in.x, state_in.v, self.force, self.inverse_mass,
+                                                  wp.vec3(*self.settings.gravity), dt, self.damping, state_out.x,
+                                                  state_out.v])
         self.find_contacts(state_in, state_out, collider, dt, substep)
         x = state_out.x
         for group in (self.stretch, self.seams, self.bending):
