@@ -4,9 +4,10 @@
                                       [--out docs/data/benchmark_solver.json]
 
 Scene: a shipped garment (default the 6k short-sleeve top) on the default body, a shipped motion at
-30 fps after the 0.5 s settle, world frame Z up, metres. Each configuration steps the same frames;
-only ``Simulation.step_frame`` is timed (after one untimed frame that compiles the kernels), on one
-core (Warp's CPU backend runs a launch on one thread). Quality over the recorded frames, measured
+30 fps after the 0.5 s settle, world frame Z up, metres. Each configuration steps the same frames,
+the configurations alternated frame by frame in one process; only ``Simulation.step_frame`` is
+timed, by CPU time (``time.process_time``; after one untimed frame that compiles the kernels), on
+one core (Warp's CPU backend runs a launch on one thread). Quality over the recorded frames, measured
 the same way for every configuration: edge strain (``sim.quality``: mean over edges and frames, the
 largest 99th percentile and max of a frame), penetration by the closest point's sign and by the
 body's winding number (largest fraction of particles inside over the frames), and the largest gap
@@ -62,48 +63,79 @@ PROFILE_ROWS = {
 }
 
 
-def run(dart, model, track, settings: SimSettings, frames: int, profile: bool = False) -> dict:
-    """Step ``frames`` recorded frames (after the settle) and measure speed and quality."""
-    sim = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
-    sim.step_frame(track.vertices[1])  # compiles the kernels; not timed
-    stiff = np.isin(dart.pair_seam, [i for i, s in enumerate(dart.seams) if s.regime == "stiff"])
-    wall, strains, p99, worst, pen, pen_w, gap, crossings, stable = 0.0, [], 0.0, 0.0, 0.0, 0.0, 0.0, 0, True
-    profiler = cProfile.Profile() if profile else None
-    last = min(len(track.vertices), track.settle_frames + frames + 1)
-    for k in range(2, last):
-        start = time.perf_counter()
-        if profiler:
-            profiler.enable()
-        sim.step_frame(track.vertices[k])
-        if profiler:
-            profiler.disable()
-        wall += time.perf_counter() - start
-        if k < track.settle_frames:
-            continue
-        m = sim.measure(winding=True)
-        if not m.finite or m.max_speed > settings.max_speed:
-            stable = False
-            break
-        x = sim.positions()
-        s = edge_strain(model, x)
-        strains.append(s.mean())
-        p99, worst = max(p99, float(np.percentile(s, 99))), max(worst, float(s.max()))
-        pen, pen_w = max(pen, m.penetration), max(pen_w, m.penetration_winding)
-        crossings = max(crossings, m.self_intersections)
-        v = x[model.particle_of_vertex]
-        if stiff.any():
-            gap = max(gap, float(np.linalg.norm(v[dart.pairs[stiff, 0]] - v[dart.pairs[stiff, 1]], axis=1).max()))
-    row = {"settings": {k: getattr(settings, k) for k in ("solver", "substeps", "iterations", "contact_skin", "tethers",
-                                                          "self_contact_interval", "self_contact_reach")},
-           "sim_fps": (last - 2) / wall, "stable": stable, "strain_mean": float(np.mean(strains)) if strains else None,
-           "strain_p99": p99, "strain_max": worst, "max_penetration": pen, "max_penetration_winding": pen_w,
-           "max_stiff_seam_gap": gap, "max_self_crossing_edges": crossings}
-    if profiler:
-        stats = pstats.Stats(profiler).stats
-        row["profile_ms_per_frame"] = {
-            label: 1e3 * sum(v[3] for key, v in stats.items() if f"{Path(key[0]).name}:{key[2]}".endswith(suffix)) / (last - 2)
-            for label, suffix in PROFILE_ROWS.items()}
-    return row
+class Trial:
+    """One configuration on the scene: its simulation, its CPU time and its quality so far."""
+
+    def __init__(self, dart, model, track, settings: SimSettings, profile: bool = False):
+        self.dart, self.model, self.track, self.settings = dart, model, track, settings
+        self.sim = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
+        self.sim.step_frame(track.vertices[1])  # compiles the kernels; not timed
+        self.stiff = np.isin(dart.pair_seam, [i for i, s in enumerate(dart.seams) if s.regime == "stiff"])
+        self.cpu, self.frames, self.strains, self.stable = 0.0, 0, [], True
+        self.p99 = self.worst = self.pen = self.pen_w = self.gap = 0.0
+        self.crossings = 0
+        self.profiler = cProfile.Profile() if profile else None
+
+    def step(self, k: int) -> None:
+        """Step frame ``k`` (timed by CPU, ``time.process_time``) and measure it once past the settle."""
+        if not self.stable:
+            return
+        start = time.process_time()
+        if self.profiler:
+            self.profiler.enable()
+        self.sim.step_frame(self.track.vertices[k])
+        if self.profiler:
+            self.profiler.disable()
+        self.cpu += time.process_time() - start
+        self.frames += 1
+        if k < self.track.settle_frames:
+            return
+        m = self.sim.measure(winding=True)
+        if not m.finite or m.max_speed > self.settings.max_speed:
+            self.stable = False
+            return
+        x = self.sim.positions()
+        s = edge_strain(self.model, x)
+        self.strains.append(s.mean())
+        self.p99, self.worst = max(self.p99, float(np.percentile(s, 99))), max(self.worst, float(s.max()))
+        self.pen, self.pen_w = max(self.pen, m.penetration), max(self.pen_w, m.penetration_winding)
+        self.crossings = max(self.crossings, m.self_intersections)
+        v = x[self.model.particle_of_vertex]
+        if self.stiff.any():
+            pairs = self.dart.pairs[self.stiff]
+            self.gap = max(self.gap, float(np.linalg.norm(v[pairs[:, 0]] - v[pairs[:, 1]], axis=1).max()))
+
+    def row(self) -> dict:
+        settings = self.settings
+        row = {"settings": {k: getattr(settings, k) for k in ("solver", "substeps", "iterations", "contact_skin",
+                                                              "tethers", "self_contact_interval", "self_contact_reach")},
+               "sim_fps": self.frames / self.cpu, "stable": self.stable,
+               "strain_mean": float(np.mean(self.strains)) if self.strains else None,
+               "strain_p99": self.p99, "strain_max": self.worst, "max_penetration": self.pen,
+               "max_penetration_winding": self.pen_w, "max_stiff_seam_gap": self.gap,
+               "max_self_crossing_edges": self.crossings}
+        if self.profiler:
+            stats = pstats.Stats(self.profiler).stats
+            row["profile_ms_per_frame"] = {
+                label: 1e3 * sum(v[3] for key, v in stats.items() if f"{Path(key[0]).name}:{key[2]}".endswith(suffix))
+                / self.frames for label, suffix in PROFILE_ROWS.items()}
+        return row
+
+
+def compare(dart, model, track, configurations: dict[str, dict], frames: int, profile: bool = False) -> dict:
+    """Every configuration on the same ``frames`` recorded frames (after the settle), alternated frame
+    by frame in this process so that a busy machine slows them alike; the first is the baseline of
+    ``ratio``. ``profile``: cProfile the last configuration."""
+    names = list(configurations)
+    trials = {name: Trial(dart, model, track, SimSettings(**configurations[name]), profile and name == names[-1])
+              for name in names}
+    for k in range(2, min(len(track.vertices), track.settle_frames + frames + 1)):
+        for trial in trials.values():
+            trial.step(k)
+    results = {name: trial.row() for name, trial in trials.items()}
+    for row in results.values():
+        row["ratio"] = row["sim_fps"] / results[names[0]]["sim_fps"]
+    return results
 
 
 def main() -> None:
@@ -117,15 +149,9 @@ def main() -> None:
     dart = load_dart(resolve_garment(args.garment))
     model = cloth_model(dart)
     track = build_body_track(load_body(), load_motion(resolve_motion(args.motion)), 30.0, 0.5)
-    results = {}
-    names = list(CONFIGURATIONS)
-    for name in names:
-        results[name] = run(dart, model, track, SimSettings(**CONFIGURATIONS[name]), args.frames,
-                            profile=args.profile and name == names[-1])
-        print(name, json.dumps(results[name]), flush=True)
-    base = results[names[0]]["sim_fps"]
-    for row in results.values():
-        row["ratio"] = row["sim_fps"] / base
+    results = compare(dart, model, track, CONFIGURATIONS, args.frames, args.profile)
+    for name, row in results.items():
+        print(name, json.dumps(row), flush=True)
     document = {"scene": {"garment": args.garment, "motion": args.motion, "frames": args.frames,
                           "particles": len(model.rest)}, "results": results}
     args.out.parent.mkdir(parents=True, exist_ok=True)

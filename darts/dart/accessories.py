@@ -25,13 +25,23 @@ def _strip_faces(rows: int, columns: int, closed: bool) -> np.ndarray:
     return np.array(faces, np.int64)
 
 
-def _on_garment(dart: Dart, points: np.ndarray) -> np.ndarray:
-    """Project points onto the garment and lift them off it along its normal (outwards)."""
+def _surface(dart: Dart):
     from darts.geometry.distance import SurfaceDistance  # starts Warp only when needed
 
-    _, closest, normal = SurfaceDistance(dart.vertices, dart.faces).query(points)
-    outward = np.sign(np.einsum("ij,ij->i", normal, closest - dart.vertices.mean(0)))[:, None]
-    return closest + LIFT * outward * normal
+    return SurfaceDistance(dart.vertices, dart.faces)
+
+
+def _project(dart: Dart, surface, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The closest garment points to ``points`` and the outward normals there (away from the
+    garment's centre)."""
+    _, closest, normal = surface.query(points, winding=False)
+    return closest, normal * np.sign(np.einsum("ij,ij->i", normal, closest - dart.vertices.mean(0)))[:, None]
+
+
+def _on_garment(dart: Dart, points: np.ndarray) -> np.ndarray:
+    """Project points onto the garment and lift them off it along its normal (outwards)."""
+    closest, outward = _project(dart, _surface(dart), points)
+    return closest + LIFT * outward
 
 
 def _neckline_ring(dart: Dart) -> np.ndarray:
@@ -74,21 +84,27 @@ def add_collar(dart: Dart, width: float = 0.055, edge_length: float = DEFAULT_ED
 
 
 def add_tie(dart: Dart, length: float = 0.42, width: float = 0.07, edge_length: float = DEFAULT_EDGE_LENGTH) -> None:
-    """A tie hanging from the centre front of the neckline, stitched there."""
+    """A tie hanging from the centre front of the neckline, stitched there, laid on the garment row
+    by row: each row's centre is one step down the surface from the last (the step taken along
+    -Y in the tangent plane, then projected), its columns spread along +X in that plane."""
     ring = _neckline_ring(dart)
     base = dart.vertices[ring].astype(np.float64)
-    front = np.argsort(-base[:, 2] + 10.0 * np.abs(base[:, 0]))[:1]
-    knot = ring[front[0]]
-    top = dart.vertices[knot].astype(np.float64)
+    knot = ring[int(np.argmin(-base[:, 2] + 10.0 * np.abs(base[:, 0])))]
     columns = 5
     rows = max(int(np.ceil(length / edge_length)), 2) + 1
+    step = length / (rows - 1)
+    surface = _surface(dart)
+    centre, normal = _project(dart, surface, dart.vertices[knot][None].astype(np.float64))
     grid = []
     for r in range(1, rows):
-        t = r / (rows - 1)
-        half = 0.5 * width * min(1.0, 0.35 + t)
-        grid.append(np.stack([np.linspace(-half, half, columns), np.full(columns, -t * length), np.zeros(columns)], 1))
-    # All rows are projected onto the garment in one query (one BVH), in front of the chest.
-    vertices = np.concatenate([top[None], _on_garment(dart, np.concatenate(grid) + top + [0.0, 0.0, 0.05])])
+        down = np.array([0.0, -1.0, 0.0]) - normal[0] * -normal[0, 1]
+        centre, normal = _project(dart, surface, centre + step * down / np.linalg.norm(down))
+        side = np.array([1.0, 0.0, 0.0]) - normal[0] * normal[0, 0]
+        half = 0.5 * width * min(1.0, 0.35 + r / (rows - 1))
+        row = centre + np.linspace(-half, half, columns)[:, None] * side / np.linalg.norm(side)
+        closest, outward = _project(dart, surface, row)
+        grid.append(closest + LIFT * outward)
+    vertices = np.concatenate([dart.vertices[knot][None].astype(np.float64), *grid])
     # Fan from the knot vertex to the first row, then a grid.
     fan = np.array([(0, 1 + c + 1, 1 + c) for c in range(columns - 1)], np.int64)
     body = _strip_faces(rows - 1, columns, closed=False) + 1

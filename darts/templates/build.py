@@ -19,6 +19,7 @@ from darts.errors import DartsInputError
 from darts.geometry.levelset import compact, insert_level_set, keep_side
 from darts.geometry.mesh import boundary_loops, directed_edges, vertex_normals
 from darts.geometry.remesh import remesh
+from darts.geometry.slivers import remove_slivers
 from darts.templates.categories import CATEGORIES, SIDES, Category, seam_fields
 from darts.templates.landmarks import (Landmarks, above_field, arm_field, below_field, landmarks,
                                        neckline_field)
@@ -29,6 +30,8 @@ DEFAULT_EDGE_LENGTH = 0.011  # metres: a short-sleeve top gets about 6k vertices
 #: iteration here, several times that at DEFAULT_EDGE_LENGTH)
 DATASET_EDGE_LENGTH = 0.02
 DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal
+#: edges shorter than this fraction of the median edge are collapsed (seam insertion leaves them)
+MIN_EDGE_FRACTION = 1 / 3
 
 
 @dataclass
@@ -230,4 +233,7 @@ def build_template(category_id: str, body: BodyModel, betas=None, edge_length: f
     vertices, faces, hull = _base_surface(category, body_vertices, body.faces, lm, edge_length)
     vertices, faces, seams = _insert_seams(vertices, faces, category, lm)
     vertices = _add_ease(vertices, faces, body_vertices, body.faces, ease)
+    edges = np.unique(np.sort(directed_edges(faces), axis=1), axis=0)
+    median = float(np.median(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)))
+    vertices, faces, seams, _ = remove_slivers(vertices, faces, seams, MIN_EDGE_FRACTION * median)
     return Template(category_id, vertices, faces, _name_lines(category, vertices, faces), seams, hull, lm)
