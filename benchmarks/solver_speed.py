@@ -1,22 +1,22 @@
-"""Speed and quality of solver settings on one scene, against a baseline run in the same process.
+"""Speed and quality of solver settings, against a baseline run in the same process, on several scenes.
 
-    python benchmarks/solver_speed.py [--garment short-sleeve-top] [--motion walk] [--frames 30]
-                                      [--out docs/data/benchmark_solver.json]
+    python benchmarks/solver_speed.py [--scenes GARMENT:MOTION ...] [--frames N] [--configurations NAME ...]
+                                      [--profile] [--out docs/data/benchmark_solver.json]
 
-Scene: a shipped garment (default the 6k short-sleeve top) on the default body, a shipped motion at
-30 fps after the 0.5 s settle, world frame Z up, metres. Each configuration steps the same frames,
-the configurations alternated frame by frame in one process; only ``Simulation.step_frame`` is
-timed, by CPU time (``time.process_time``; after one untimed frame that compiles the kernels), on
-one core (Warp's CPU backend runs a launch on one thread). Quality over the recorded frames, measured
-the same way for every configuration: edge strain (``sim.quality``: mean over edges and frames, the
-largest 99th percentile and max of a frame), penetration by the closest point's sign and by the
-body's winding number (largest fraction of particles inside over the frames), and the largest gap
-of a stiff seam (m), and the most garment edges passing through a garment triangle in a frame. The
-first configuration is the baseline (the default before long-range tethers and the contact skin:
-XPBD 40 substeps x 2 sweeps, every particle searched every substep, self-contact searched every 2
-substeps within 1 cm); ``ratio`` is each one's speed over it. The time of building the tethers (once per run, a few seconds) is not in
-the frame rate. ``--profile`` adds where the time of the last configuration goes (cProfile, cumulative
-seconds per frame of the solver's pieces).
+Scenes (issue 30): the 6k short-sleeve top on the walk (30 frames after the settle), the short
+skirt and the long pants on the walk and the squat (the whole motion), on the default body at 30 fps
+after the 0.5 s settle, world frame Z up, metres. In each scene every configuration steps the same
+frames, the configurations alternated frame by frame in one process; only
+``Simulation.step_frame`` is timed, by CPU time (``time.process_time``; after one untimed frame that
+compiles the kernels), on one core (Warp's CPU backend runs a launch on one thread). Quality over
+the recorded frames, measured the same way for every configuration: edge strain (``sim.quality``:
+mean over edges and frames, the largest 99th percentile and max of a frame), penetration by the
+closest point's sign and by the body's winding number (largest fraction of particles inside over
+the frames), the largest gap of a stiff seam (m), and the most garment edges passing through a
+garment triangle in a frame. The first configuration is the baseline (the default when issue 30 was
+filed); ``ratio`` is each one's speed over it. The time of building the tethers (once per run, a few
+seconds) is not in the frame rate. ``--profile`` adds where the time of the last configuration goes
+(cProfile, cumulative seconds per frame of the solver's pieces).
 """
 from __future__ import annotations
 
@@ -39,22 +39,22 @@ from sim.quality import edge_strain
 from sim.settings import SimSettings
 from sim.simulation import Simulation
 
-#: Self-contact as the previous defaults searched it: every 2 substeps, within 1 cm beyond the separation
-#: (plus, now, what the particles travel until the next search, which the previous defaults did not add).
-PREVIOUS_SELF_CONTACT = dict(self_contact_interval=2, self_contact_reach=0.01)
+#: The scenes of issue 30: the 6k top on the walk, a skirt and pants on the walk and the squat.
+SCENES = ("short-sleeve-top:walk", "short-skirt:walk", "short-skirt:squat", "long-pants:walk", "long-pants:squat")
+#: The default when issue 30 was filed: self-contact searched every 2 substeps within 1 cm, every
+#: particle searching the BVH at every search (no lists).
+ISSUE_30_DEFAULT = dict(solver="xpbd", substeps=20, iterations=2, self_contact_interval=2, self_contact_reach=0.01,
+                        self_contact_list_reach=0.0)
 CONFIGURATIONS = {
-    "xpbd 40x2 (the default before tethers)": dict(solver="xpbd", substeps=40, iterations=2, contact_skin=0.0,
-                                                   tethers=False, **PREVIOUS_SELF_CONTACT),
-    "xpbd 20x2, no tethers, no skin": dict(solver="xpbd", substeps=20, iterations=2, contact_skin=0.0, tethers=False,
-                                           **PREVIOUS_SELF_CONTACT),
-    "xpbd 20x2, tethers, 5 mm skin (the previous default)": dict(solver="xpbd", substeps=20, iterations=2,
-                                                                 **PREVIOUS_SELF_CONTACT),
-    "default (xpbd 20x2, tethers, 5 mm skin, self-contact every 4 substeps within 2 mm + travel)": {},
+    "issue 30's default: xpbd 20x2, tethers, 5 mm skin, self-contact searched every 2 substeps within 1 cm": ISSUE_30_DEFAULT,
+    "self-contact searched every 2 substeps within 2 mm + travel, broad phase every 10 substeps": dict(self_contact_interval=2),
+    "the same with bending every 2 substeps": dict(self_contact_interval=2, bending_interval=2),
+    "default: searched every 4 substeps within 2 mm + travel, broad phase every 10 substeps": {},
 }
 #: Functions whose cumulative time is the profile's rows (qualified name suffixes).
 PROFILE_ROWS = {
     "body contact search and tracking": "collider.py:update",
-    "self-contact search": "self_contact.py:search",
+    "self-contact search (candidate lists, search, edges)": "self_contact.py:search",
     "self-contact projection": "self_contact.py:resolve",
     "body contact projection": "collider.py:resolve",
     "friction": "collider.py:friction",
@@ -108,7 +108,9 @@ class Trial:
     def row(self) -> dict:
         settings = self.settings
         row = {"settings": {k: getattr(settings, k) for k in ("solver", "substeps", "iterations", "contact_skin",
-                                                              "tethers", "self_contact_interval", "self_contact_reach")},
+                                                              "tethers", "bending_interval", "self_contact_interval",
+                                                              "self_contact_broad_interval", "self_contact_list_reach",
+                                                              "self_contact_reach")},
                "sim_fps": self.frames / self.cpu, "stable": self.stable,
                "strain_mean": float(np.mean(self.strains)) if self.strains else None,
                "strain_p99": self.p99, "strain_max": self.worst, "max_penetration": self.pen,
@@ -125,37 +127,50 @@ class Trial:
 def compare(dart, model, track, configurations: dict[str, dict], frames: int, profile: bool = False) -> dict:
     """Every configuration on the same ``frames`` recorded frames (after the settle), alternated frame
     by frame in this process so that a busy machine slows them alike; the first is the baseline of
-    ``ratio``. ``profile``: cProfile the last configuration."""
+    ``ratio``. ``profile``: a second copy of the last configuration runs alongside under cProfile
+    (its rows go to the last configuration's ``profile_ms_per_frame``; the profiler's overhead stays
+    out of the ratios)."""
     names = list(configurations)
-    trials = {name: Trial(dart, model, track, SimSettings(**configurations[name]), profile and name == names[-1])
-              for name in names}
+    trials = {name: Trial(dart, model, track, SimSettings(**configurations[name])) for name in names}
+    profiled = Trial(dart, model, track, SimSettings(**configurations[names[-1]]), profile=True) if profile else None
     for k in range(2, min(len(track.vertices), track.settle_frames + frames + 1)):
-        for trial in trials.values():
+        for trial in [*trials.values(), *([profiled] if profiled else [])]:
             trial.step(k)
     results = {name: trial.row() for name, trial in trials.items()}
     for row in results.values():
         row["ratio"] = row["sim_fps"] / results[names[0]]["sim_fps"]
+    if profiled:
+        results[names[-1]]["profile_ms_per_frame"] = profiled.row()["profile_ms_per_frame"]
     return results
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--garment", default="short-sleeve-top")
-    parser.add_argument("--motion", default="walk")
-    parser.add_argument("--frames", type=int, default=30, help="recorded frames after the settle (default 30)")
-    parser.add_argument("--profile", action="store_true", help="profile the last configuration")
+    parser.add_argument("--scenes", nargs="+", default=list(SCENES), metavar="GARMENT:MOTION",
+                        help=f"shipped garment and motion names or files (default: {' '.join(SCENES)})")
+    parser.add_argument("--frames", type=int, default=None,
+                        help="recorded frames after the settle (default: 30 for the first scene, the whole motion for the others)")
+    parser.add_argument("--configurations", nargs="+", default=list(CONFIGURATIONS), choices=list(CONFIGURATIONS),
+                        metavar="NAME", help="which rows (default: all; the first is the baseline)")
+    parser.add_argument("--profile", action="store_true", help="profile the last configuration (a copy of it, run alongside)")
     parser.add_argument("--out", type=Path, default=Path("docs/data/benchmark_solver.json"))
     args = parser.parse_args()
-    dart = load_dart(resolve_garment(args.garment))
-    model = cloth_model(dart)
-    track = build_body_track(load_body(), load_motion(resolve_motion(args.motion)), 30.0, 0.5)
-    results = compare(dart, model, track, CONFIGURATIONS, args.frames, args.profile)
-    for name, row in results.items():
-        print(name, json.dumps(row), flush=True)
-    document = {"scene": {"garment": args.garment, "motion": args.motion, "frames": args.frames,
-                          "particles": len(model.rest)}, "results": results}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(document, indent=1))
+    body = load_body()
+    document = {"scenes": []}
+    for index, scene in enumerate(args.scenes):
+        garment, motion = scene.split(":")
+        dart = load_dart(resolve_garment(garment))
+        model = cloth_model(dart)
+        track = build_body_track(body, load_motion(resolve_motion(motion)), 30.0, 0.5)
+        frames = args.frames or (30 if index == 0 else len(track.vertices))
+        results = compare(dart, model, track, {name: CONFIGURATIONS[name] for name in args.configurations}, frames,
+                          args.profile)
+        for name, row in results.items():
+            print(scene, name, json.dumps(row), flush=True)
+        document["scenes"].append({"garment": garment, "motion": motion, "frames": min(frames, len(track.vertices) - track.settle_frames - 1),
+                                   "particles": len(model.rest), "results": results})
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(document, indent=1))  # after every scene: a long run keeps what it has
 
 
 if __name__ == "__main__":

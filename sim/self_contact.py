@@ -74,47 +74,126 @@ def face_normal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), f
     return wp.normalize(wp.cross(x[faces[face, 1]] - a, x[faces[face, 2]] - a))
 
 
-@wp.kernel
-def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
-                       x_start: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
-                       reach: float, mean_velocity: wp.vec3, other_speed: float, lookahead: float, max_speed: float,
-                       exclusion: float,
-                       contact_face: wp.array(dtype=wp.int32), contact_bary: wp.array(dtype=wp.vec3),
-                       contact_side: wp.array(dtype=float)):
-    """Closest garment triangle within reach_i = ``reach`` + ``lookahead`` min(|v_i - ``mean_velocity``|
-    + ``other_speed``, ``max_speed``) of each particle (what the particle and a triangle moving at
-    ``other_speed`` can close until the next search), facing it, whose corners are all
-    farther than ``exclusion`` from it on the rest garment (-1: none), its barycentrics, and the side of its plane
-    the particle must not leave: kept from the last search for the same triangle, else the side it
-    was on at the start of the substep (``x_start``, after the last projection)."""
-    i = wp.tid()
-    p = x[i]
-    if not wp.isfinite(p):  # a blown-up particle: the run is about to stop; do not walk the BVH
-        contact_face[i] = -1
-        return
+#: candidate triangles kept per particle by the broad phase (the nearest)
+MAX_CANDIDATES = 16
+
+
+def _speeds(v, max_speed: float) -> tuple:
+    """(mean velocity v̄ as a Warp vec3, the median of |v_i - v̄| capped at ``max_speed``) over the
+    finite velocities ``v`` [P] (a blown-up particle, the run about to stop, aside)."""
+    velocities = v.numpy()
+    finite = np.isfinite(velocities).all(axis=1)
+    if not finite.any():
+        return wp.vec3(0.0), 0.0
+    mean = velocities[finite].mean(axis=0)
+    return wp.vec3(*mean), min(float(np.median(np.linalg.norm(velocities[finite] - mean, axis=1))), max_speed)
+
+
+@wp.func
+def reach_of(i: int, v: wp.array(dtype=wp.vec3), reach: float, mean_velocity: wp.vec3, other_speed: float,
+             lookahead: float, max_speed: float):
+    """reach_i = ``reach`` + ``lookahead`` min(|v_i - ``mean_velocity``| + ``other_speed``, ``max_speed``):
+    what particle i and a triangle moving at ``other_speed`` can close in ``lookahead`` seconds."""
     radius = reach + lookahead * wp.min(wp.length(v[i] - mean_velocity) + other_speed, max_speed)
     if not wp.isfinite(radius):
         radius = reach
+    return radius
+
+
+@wp.kernel
+def gather_candidates(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
+                      v: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), reach: float,
+                      mean_velocity: wp.vec3, other_speed: float, lookahead: float, max_speed: float,
+                      most: float, exclusion: float, candidates: wp.array2d(dtype=wp.int32),
+                      distances: wp.array2d(dtype=float), count: wp.array(dtype=wp.int32)):
+    """Broad phase: the garment triangles within reach_i (``reach_of``) of each particle whose corners
+    are all farther than ``exclusion`` from it on the rest garment, nearest first, at most
+    ``candidates.shape[1]`` of them (the nearest kept), their distances, and how many. A particle
+    whose reach_i is over ``most`` gets no list (count -1): it searches the BVH itself."""
+    i = wp.tid()
+    p = x[i]
+    count[i] = 0
+    if not wp.isfinite(p):  # a blown-up particle: the run is about to stop; do not walk the BVH
+        return
+    radius = reach_of(i, v, reach, mean_velocity, other_speed, lookahead, max_speed)
+    if radius > most:
+        count[i] = -1
+        return
     r = wp.vec3(radius)
     query = wp.mesh_query_aabb(mesh, p - r, p + r)
+    capacity = candidates.shape[1]
+    n = int(0)
     face = int(0)
-    best = int(-1)
-    best_distance = radius
-    best_bary = wp.vec3(0.0)
     while wp.mesh_query_aabb_next(query, face):
         a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
         if near_on_rest(rest, i, a, b, c, exclusion):
             continue
         bary = closest_on_triangle(p, x[a], x[b], x[c])
-        d = p - (bary[0] * x[a] + bary[1] * x[b] + bary[2] * x[c])
-        distance = wp.length(d)
-        # Only a triangle the particle faces (within 60 degrees of its normal): one beside it, in its
-        # own plane, is the particle's own layer a little further on, with no side to keep.
-        facing = wp.abs(wp.dot(d, wp.normalize(wp.cross(x[b] - x[a], x[c] - x[a])))) >= 0.5 * distance
-        if distance < best_distance and facing:
-            best = face
-            best_distance = distance
-            best_bary = bary
+        distance = wp.length(p - (bary[0] * x[a] + bary[1] * x[b] + bary[2] * x[c]))
+        if distance >= radius or (n == capacity and distance >= distances[i, n - 1]):
+            continue
+        slot = wp.min(n, capacity - 1)  # insertion sort; when full, the farthest drops out
+        while slot > 0 and distances[i, slot - 1] > distance:
+            distances[i, slot] = distances[i, slot - 1]
+            candidates[i, slot] = candidates[i, slot - 1]
+            slot -= 1
+        distances[i, slot] = distance
+        candidates[i, slot] = face
+        n = wp.min(n + 1, capacity)
+    count[i] = n
+
+
+@wp.func
+def facing_distance(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), p: wp.vec3, face: int):
+    """Distance from p to the closest point of a garment triangle and its barycentrics; the distance
+    is infinite unless p faces the triangle (the closest point within 60 degrees of its normal: one
+    beside it, in its own plane, is the particle's own layer a little further on, with no side to keep)."""
+    a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
+    bary = closest_on_triangle(p, x[a], x[b], x[c])
+    d = p - (bary[0] * x[a] + bary[1] * x[b] + bary[2] * x[c])
+    distance = wp.length(d)
+    if wp.abs(wp.dot(d, wp.normalize(wp.cross(x[b] - x[a], x[c] - x[a])))) < 0.5 * distance:
+        distance = float(1.0e30)
+    return distance, bary
+
+
+@wp.kernel
+def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
+                       x_start: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
+                       candidates: wp.array2d(dtype=wp.int32), candidate_count: wp.array(dtype=wp.int32),
+                       reach: float, mean_velocity: wp.vec3, other_speed: float, lookahead: float, max_speed: float,
+                       exclusion: float, contact_face: wp.array(dtype=wp.int32), contact_bary: wp.array(dtype=wp.vec3),
+                       contact_side: wp.array(dtype=float)):
+    """Search: each particle's closest facing triangle (``facing_distance``) within reach_i
+    (``reach_of``) among its candidates, or, for a particle without a list, among the BVH's triangles
+    whose corners are all farther than ``exclusion`` from it on the rest garment (-1: none); its
+    barycentrics, and the side of its plane the particle must not leave: kept from the last search
+    for the same triangle, else the side it was on at the start of the substep (``x_start``, after
+    the last projection)."""
+    i = wp.tid()
+    p = x[i]
+    best = int(-1)
+    best_distance = reach_of(i, v, reach, mean_velocity, other_speed, lookahead, max_speed)
+    best_bary = wp.vec3(0.0)
+    if candidate_count[i] >= 0:
+        for k in range(candidate_count[i]):
+            distance, bary = facing_distance(x, faces, p, candidates[i, k])
+            if distance < best_distance:
+                best = candidates[i, k]
+                best_distance = distance
+                best_bary = bary
+    elif wp.isfinite(p):
+        r = wp.vec3(best_distance)
+        query = wp.mesh_query_aabb(mesh, p - r, p + r)
+        face = int(0)
+        while wp.mesh_query_aabb_next(query, face):
+            if near_on_rest(rest, i, faces[face, 0], faces[face, 1], faces[face, 2], exclusion):
+                continue
+            distance, bary = facing_distance(x, faces, p, face)
+            if distance < best_distance:
+                best = face
+                best_distance = distance
+                best_bary = bary
     if best >= 0 and best != contact_face[i]:
         contact_side[i] = wp.sign(wp.dot(x_start[i] - x_start[faces[best, 0]], face_normal(x_start, faces, best)))
     contact_face[i] = best
@@ -390,6 +469,9 @@ class SelfContact:
         self.rest = wp.array(np.ascontiguousarray(rest, np.float32), dtype=wp.vec3, device=device)
         self.mesh = wp.Mesh(points=x, indices=wp.array(np.ascontiguousarray(faces, np.int32).reshape(-1), dtype=wp.int32,
                                                        device=device))
+        self.candidates = wp.zeros((self.count, MAX_CANDIDATES), dtype=wp.int32, device=device)
+        self.candidate_distance = wp.zeros((self.count, MAX_CANDIDATES), dtype=float, device=device)
+        self.candidate_count = wp.full(self.count, -1, dtype=wp.int32, device=device)  # -1: no list yet
         self.face = wp.full(self.count, -1, dtype=wp.int32, device=device)
         self.bary = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self.side = wp.zeros(self.count, dtype=float, device=device)
@@ -403,22 +485,28 @@ class SelfContact:
         self._hits = wp.zeros(self.count, dtype=float, device=device)
         self._crossing = wp.zeros(self.edges.shape[0], dtype=wp.int32, device=device)
 
-    def search(self, x_start, v, reach: float, lookahead: float, max_speed: float) -> None:
-        """Refit the garment's BVH to the particles and find each one's closest non-neighbour triangle
-        within ``reach`` plus what it and a particle at the garment's median speed (speeds relative to
-        the mean of the velocities ``v`` [P], m/s) travel in ``lookahead`` seconds, and each
-        edge's closest non-neighbour edge within ``reach`` (``x_start``: the positions the sides are
-        taken from); no particle's reach counts more than ``max_speed`` (m/s)."""
+    def search(self, x_start, v, reach: float, lookahead: float, max_speed: float,
+               broad: tuple[float, float, float] | None = None) -> None:
+        """Refit the garment's BVH to the particles; with ``broad`` = (reach_b, lookahead_b, most),
+        first list each particle's candidates (``gather_candidates``: the non-neighbour triangles
+        within reach_b plus what it and a particle at the garment's median speed travel in
+        lookahead_b seconds, the nearest MAX_CANDIDATES; none for a particle whose reach is over
+        ``most``, m). Then give each particle its closest facing triangle within ``reach`` plus what
+        it and a particle at the median speed (speeds relative to the mean of the velocities ``v``
+        [P], m/s) travel in ``lookahead`` seconds, among its candidates (without a list, among the
+        BVH's), and each edge its closest non-neighbour edge within ``reach`` (``x_start``: the
+        positions the sides are taken from); no particle's reach counts more than ``max_speed`` (m/s)."""
         self.reach = float(reach)
         self.mesh.refit()
-        velocities = v.numpy()
-        finite = np.isfinite(velocities).all(axis=1)  # a blown-up particle (the run is about to stop) aside
-        mean = velocities[finite].mean(axis=0) if finite.any() else np.zeros(3)
-        speeds = np.linalg.norm(velocities[finite] - mean, axis=1)
-        other = min(float(np.median(speeds)), max_speed) if finite.any() else 0.0
+        mean, other = _speeds(v, max_speed)
+        if broad is not None:
+            broad_reach, broad_lookahead, most = broad
+            self.launch(gather_candidates, self.count,
+                        [self.mesh.id, self.faces, self.x, v, self.rest, broad_reach, mean, other, broad_lookahead,
+                         max_speed, most, self.exclusion, self.candidates, self.candidate_distance, self.candidate_count])
         self.launch(find_self_contacts, self.count,
-                    [self.mesh.id, self.faces, self.x, x_start, v, self.rest, reach, wp.vec3(*mean), other, lookahead,
-                     max_speed, self.exclusion, self.face, self.bary, self.side])
+                    [self.mesh.id, self.faces, self.x, x_start, v, self.rest, self.candidates, self.candidate_count,
+                     reach, mean, other, lookahead, max_speed, self.exclusion, self.face, self.bary, self.side])
         if self.edge_edge:
             self.launch(find_edge_contacts, self.edges.shape[0],
                         [self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,

@@ -34,7 +34,13 @@ class SimSettings:
     contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
     contact_interval: int = 1  # substeps between the body's closest-point searches
     contact_skin: float = 0.005  # m a particle moves (relative to its contact) before it is searched again; 0: always
-    self_contact_interval: int = 4  # substeps between the garment's self-contact searches
+    bending_interval: int = 1  # XPBD: substeps between bending sweeps
+    self_contact_interval: int = 4  # substeps between the garment's self-contact searches (narrow phase)
+    # substeps between the self-contact broad phases (candidate triangles for the searches until the next)
+    self_contact_broad_interval: int = 10
+    # m the most that what a particle and the layers around it travel until the next broad phase may add
+    # to its list's reach; a faster particle searches the BVH at every search instead
+    self_contact_list_reach: float = 0.01
     # m searched beyond the separation for the garment's self-contacts, plus what each particle and the
     # garment's fast particles travel until the next search (``SelfContact.search``)
     self_contact_reach: float = 0.002
@@ -56,7 +62,7 @@ class SimSettings:
         if self.solver not in solver_names():
             raise ValueError(f"unknown solver '{self.solver}' (one of {', '.join(solver_names())})")
         finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
-                                               self.damping, self.contact_reach, self.self_contact_reach, self.contact_skin, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
+                                               self.damping, self.contact_reach, self.self_contact_reach, self.self_contact_list_reach, self.contact_skin, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
         if not finite:
             raise ValueError("settings must be finite numbers")
         rules = [
@@ -65,6 +71,7 @@ class SimSettings:
             (self.iterations >= 1, f"iterations must be >= 1, got {self.iterations}"),
             (self.contact_interval >= 1, f"contact interval must be >= 1, got {self.contact_interval}"),
             (self.self_contact_interval >= 1, f"self-contact interval must be >= 1, got {self.self_contact_interval}"),
+            (self.bending_interval >= 1, f"bending interval must be >= 1, got {self.bending_interval}"),
             (self.cg_iterations >= 1, f"cg iterations must be >= 1, got {self.cg_iterations}"),
             (0 <= self.gust <= 1, f"gust must be in [0, 1], got {self.gust}"),
             (self.air_density >= 0 and self.drag_coefficient >= 0, "air density and drag must be >= 0"),
@@ -72,6 +79,9 @@ class SimSettings:
             (self.contact_reach > 0 and self.self_contact_reach > 0 and self.max_speed > 0,
              "contact reaches and max speed must be > 0"),
             (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),
+            (self.self_contact_broad_interval >= 1,
+             f"self-contact broad-phase interval must be >= 1, got {self.self_contact_broad_interval}"),
+            (self.self_contact_list_reach >= 0, f"self-contact list reach must be >= 0 m, got {self.self_contact_list_reach}"),
         ]
         for ok, message in rules:
             if not ok:

@@ -154,7 +154,8 @@ def _upper_contacts(speed: float, lookahead: float) -> int:
     velocities = np.zeros_like(positions)
     velocities[len(positions) // 2:, 2] = -speed
     contact = SelfContact(x, rest, faces, edges, 0.001, 0.015, "cpu")
-    contact.search(x, wp.array(velocities.astype(np.float32), dtype=wp.vec3), 0.003, lookahead, 50.0)
+    v = wp.array(velocities.astype(np.float32), dtype=wp.vec3)
+    contact.search(x, v, 0.003, lookahead, 50.0)
     face = contact.face.numpy()[len(positions) // 2:]
     return int(np.sum((face >= 0) & (face < len(faces) // 2)))
 
@@ -167,3 +168,87 @@ def test_search_reaches_as_far_as_the_layers_close_before_the_next_search():
     assert _upper_contacts(1.0, 1.0 / 150.0) == 121
     assert _upper_contacts(1.0, 0.0) == 0
     assert _upper_contacts(0.0, 1.0 / 150.0) == 0
+
+
+def _stacked_sheet(rng) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A sheet folded twice into a Z of three layers 4 mm apart (the folds 4 mm tall), then jittered
+    by up to 1.5 mm: positions, rest (the unfolded sheet, so layers are far apart on it), faces, edges."""
+    spacing, width, layer = 0.01, 0.1, 0.15
+    s = np.arange(0.0, 3 * layer + 1e-9, spacing)
+    y = np.arange(0.0, width + 1e-9, spacing)
+    level = np.floor(s / layer).clip(0, 2)
+    along = np.where(level == 1, 2 * layer - s, s - level * layer)
+    positions = np.array([[px, py, 0.004 * pz] for px, pz in zip(along, level) for py in y])
+    positions += rng.uniform(-0.0015, 0.0015, positions.shape)
+    rest = np.array([[ps, py, 0.0] for ps in s for py in y])
+    n = len(y)
+    faces = np.array([f for i in range(len(s) - 1) for j in range(n - 1)
+                      for f in (((i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1), (i * n + j, (i + 1) * n + j + 1, i * n + j + 1)))])
+    edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    return positions, rest, faces, edges
+
+
+def _brute_force_contacts(positions, rest, faces, reach, exclusion) -> np.ndarray:
+    """The closest facing triangle within ``reach`` of every particle whose corners are all farther
+    than ``exclusion`` on the rest sheet (-1: none), every triangle tested; and the distance to it."""
+    import trimesh
+
+    p_index, f_index = np.meshgrid(np.arange(len(positions)), np.arange(len(faces)), indexing="ij")
+    p_index, f_index = p_index.ravel(), f_index.ravel()
+    far = (np.linalg.norm(rest[faces[f_index]] - rest[p_index][:, None], axis=2) > exclusion).all(1)
+    p_index, f_index = p_index[far], f_index[far]
+    triangles = positions[faces[f_index]]
+    closest = trimesh.triangles.closest_point(triangles, positions[p_index])
+    d = positions[p_index] - closest
+    distance = np.linalg.norm(d, axis=1)
+    normal = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    keep = (distance < reach) & (np.abs(np.einsum("ij,ij->i", d, normal)) >= 0.5 * distance)
+    best, best_distance = np.full(len(positions), -1), np.full(len(positions), np.inf)
+    for p, f, dist in zip(p_index[keep], f_index[keep], distance[keep]):
+        if dist < best_distance[p]:
+            best[p], best_distance[p] = f, dist
+    return best, best_distance
+
+
+def _matches_brute_force(contact, positions, rest, faces, reach, exclusion, which) -> int:
+    """Assert that the particles ``which`` found the brute force's contact (or one as close: a tie
+    may go either way); return how many of them have one."""
+    import trimesh
+
+    expected, distance = _brute_force_contacts(positions, rest, faces, reach, exclusion)
+    found = contact.face.numpy()
+    different = np.where((found != expected) & which)[0]
+    if len(different):
+        assert (found[different] >= 0).all()
+        closest = trimesh.triangles.closest_point(positions[faces[found[different]]], positions[different])
+        assert np.allclose(np.linalg.norm(positions[different] - closest, axis=1), distance[different], atol=1e-6)
+    return int(((expected >= 0) & which).sum())
+
+
+def test_candidate_lists_find_every_contact_the_brute_force_finds():
+    """Three layers of a sheet folded into a Z, 4 mm apart and jittered: the broad phase's lists (within
+    12 mm) and the search over them give every particle the same closest facing triangle within the
+    7 mm reach as testing every triangle does, when the lists are made and after every particle has
+    moved up to 1 mm with them kept; and so does a particle without a list (its reach over the most
+    a list may cover), which searches the BVH."""
+    rng = np.random.default_rng(3)
+    positions, rest, faces, edges = _stacked_sheet(rng)
+    x = wp.array(positions.astype(np.float32), dtype=wp.vec3)
+    v = wp.zeros(len(positions), dtype=wp.vec3)  # at rest: every reach is the plain one
+    exclusion, reach = 0.015, 0.007
+    contact = SelfContact(x, rest, faces, edges, 0.001, exclusion, "cpu")
+    everyone = np.ones(len(positions), bool)
+    contact.search(x, v, reach, 0.0, 50.0, broad=(0.012, 0.0, 1.0))
+    assert (contact.candidate_count.numpy() > 8).any()  # several layers' triangles in some lists
+    assert _matches_brute_force(contact, positions, rest, faces, reach, exclusion, everyone) > 0.5 * len(positions)
+
+    step = rng.normal(size=positions.shape)
+    positions = positions + rng.uniform(0.0, 0.001, (len(positions), 1)) * step / np.linalg.norm(step, axis=1, keepdims=True)
+    x.assign(positions.astype(np.float32))
+    contact.search(x, v, reach, 0.0, 50.0)  # the lists kept
+    _matches_brute_force(contact, positions, rest, faces, reach, exclusion, everyone)
+
+    contact.search(x, v, reach, 0.0, 50.0, broad=(0.012, 0.0, 0.005))  # 12 mm is over the most: no lists
+    assert (contact.candidate_count.numpy() == -1).all()
+    _matches_brute_force(contact, positions, rest, faces, reach, exclusion, everyone)

@@ -83,9 +83,19 @@ class Solver:
         """The body's contacts for this substep (``BodyCollider.update``) and, every
         ``self_contact_interval`` substeps, the garment's self-contacts."""
         collider.update(state_out.x, state_in.x, substep, dt)
-        if self.settings.self_contact and substep % self.settings.self_contact_interval == 0:
-            self.self_contact.search(state_in.x, state_in.v, self.self_contact.separation + self.settings.self_contact_reach,
-                                     self.settings.self_contact_interval * dt, self.settings.max_speed)
+        settings = self.settings
+        interval, every = settings.self_contact_interval, settings.self_contact_broad_interval
+        if settings.self_contact and substep % interval == 0:
+            reach = self.self_contact.separation + settings.self_contact_reach
+            broad = None
+            if substep % every < interval:
+                # The broad phase: what can come within reach before the next broad phase's first
+                # search is over, velocities as they are now plus a layer falling freely onto one
+                # that is held (1/2 |g| T^2); particles faster than that allows search the BVH.
+                lookahead = (every + interval) * dt
+                fall = 0.5 * float(np.linalg.norm(settings.gravity)) * lookahead ** 2
+                broad = (reach + fall, lookahead, reach + fall + settings.self_contact_list_reach)
+            self.self_contact.search(state_in.x, state_in.v, reach, interval * dt, settings.max_speed, broad)
 
     def resolve_contacts(self, state: ClothState, collider: BodyCollider) -> None:
         """Keep particles off the garment's own triangles (layers the body has pushed this substep

@@ -87,9 +87,10 @@ class XpbdSolver(Solver):
         x = state_out.x
         for group in (self.stretch, self.seams, self.bending):
             group.multiplier.zero_()
-        b = self.bending.fields
-        self.bending.launch(kernels.solve_bending, [b["rest_angle"], b["compliance"]],
-                            [self.inverse_mass, dt, self.bending.multiplier, x])
+        if substep % self.settings.bending_interval == 0:  # its compliance spread over the interval
+            b = self.bending.fields
+            self.bending.launch(kernels.solve_bending, [b["rest_angle"], b["compliance"]],
+                                [self.inverse_mass, dt * self.settings.bending_interval, self.bending.multiplier, x])
         t, d, seam = self.tethers.fields, self.stretch.fields, self.seams.fields
         for _ in range(self.settings.iterations):
             self.tethers.launch(kernels.solve_max_distances, [t["limit"]], [self.inverse_mass, x])
