@@ -2,7 +2,9 @@
 
 Every search (every ``self_contact_interval`` substeps) refits a BVH over the garment's
 own triangles (the particle array itself, so never rebuilt) and gives each particle its closest
-triangle within reach that is not its neighbour on the rest garment, with the side it is on. Each
+triangle within reach that is not its neighbour on the rest garment, with the side it is on: from
+the candidate triangles a broad phase listed for it (every ``self_contact_broad_interval``
+substeps), or from the BVH for a particle too fast for a list. Each
 sweep then keeps the particle ``separation`` away from that triangle's plane on that side, sharing
 the correction with the triangle's corners by inverse mass and barycentric weight (an XPBD contact
 with zero compliance). Remembering the side means a particle that has already passed the plane is
