@@ -11,4 +11,4 @@ class DartsInputError(ValueError):
     def __init__(self, source: str | os.PathLike | None, problem: str):
         self.source = None if source is None else os.fspath(source)
         self.problem = " ".join(problem.split())
-        super().__init__(f"{self.source}: {problem}" if self.source else problem)
+        super().__init__(f"{self.source}: {self.problem}" if self.source else self.problem)

@@ -111,6 +111,32 @@ def read_input(path: str | os.PathLike, kind: str) -> bytes:
         raise DartsInputError(path, f"cannot be read ({exc.strerror or exc})") from None
 
 
+#: pixels an input image may have: a 64-megapixel picture decodes to 192 MB of RGB; beyond that
+#: the reconstruction learns nothing more (it works at 224 px) and a decompression bomb would not fit
+MAX_IMAGE_PIXELS = 64_000_000
+
+
+def read_image(path: str | os.PathLike, mode: str = "RGB") -> np.ndarray:
+    """An image file as an array ([H,W,3] uint8 for mode RGB, [H,W] for L), or a DartsInputError:
+    not an image, damaged, or more than MAX_IMAGE_PIXELS pixels (checked from the header, before
+    anything is decoded)."""
+    from PIL import Image, UnidentifiedImageError
+
+    path = check_input_file(path, "image")
+    limit, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None  # our own limit, with the size in its message
+    try:
+        with Image.open(path) as image:
+            width, height = image.size
+            if width * height > MAX_IMAGE_PIXELS:
+                raise DartsInputError(path, f"the image is {width}x{height} pixels ({width * height / 1e6:.0f} "
+                                            f"megapixels); at most {MAX_IMAGE_PIXELS / 1e6:.0f} megapixels are read")
+            return np.asarray(image.convert(mode))
+    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:  # PIL's errors for damaged files
+        raise DartsInputError(path, f"not an image ({exc})") from None
+    finally:
+        Image.MAX_IMAGE_PIXELS = limit
+
+
 def check_output(path: str | os.PathLike, suffixes: tuple[str, ...] | None = None, directory: bool = False) -> Path:
     """``path`` as a Path, or a DartsInputError if the output cannot be written there: a suffix not
     in ``suffixes``, an existing directory (a file when ``directory``: the output is a folder), a

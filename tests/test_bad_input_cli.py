@@ -216,6 +216,18 @@ def test_a_body_pickle_holding_no_array_is_one_line(make, problem, tmp_path, run
     assert problem in _one_line(code, err, tmp_path / "body.pkl")
 
 
+@pytest.mark.parametrize("content, problem", [
+    (lambda: BODY.read_bytes(), "is a zip archive (an .npz?), not a pickle: name it .npz"),
+    # the pickle module's message for a persistent id carries a line break
+    (lambda: b"P0\n.", "A load persistent id instruction was encountered, but no persistent_load"),
+])
+def test_a_body_pkl_that_is_no_pickle_is_one_line(content, problem, tmp_path, run_darts):
+    path = tmp_path / "body.pkl"
+    path.write_bytes(content())
+    code, _, err = run_darts("body", "info", "--body", path)
+    assert problem in _one_line(code, err, path)
+
+
 def test_an_unreadable_file_says_so_not_that_it_is_no_zip(tmp_path, run_darts, monkeypatch):
     """Permission is simulated (``chmod 0`` does not stop root, who runs CI)."""
     path = tmp_path / "motion.npz"

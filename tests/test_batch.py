@@ -110,17 +110,30 @@ def test_a_broken_garment_fails_its_jobs_only(coarse_garments, tmp_path, run_dar
     ("bad setting", "substeps must be >= 1"),
     ("unknown material", "invalid choice: 'wool'"),
     ("address", "cannot reach a Ray cluster at 127.0.0.1:9"),
+    ("unknown garment", "sweep.garments: poncho: neither a file nor a shipped garment (shipped: long-pants"),
+    ("missing motion file", "jobs[0].motion: "),
 ])
-def test_bad_batch_input_is_one_line_exit_2_and_no_output(case, problem, tmp_path, run_darts):
+@pytest.mark.parametrize("listing", [False, True])
+def test_bad_batch_input_is_one_line_exit_2_and_no_output(case, problem, listing, tmp_path, run_darts):
+    """Also with --list, which runs nothing: the same checks, and OUT_DIR is not made."""
     spec = tmp_path / "spec.toml"
     text = EXAMPLE.read_text()
     spec.write_text({"unreadable": "[sim\nframes = ", "missing": text, "unknown key": text.replace("frames = 6", "frame = 6"),
                      "bad setting": text + "\n[[jobs]]\ngarment = 'short-skirt'\nmotion = 'walk'\nsim = { substeps = 0 }\n",
                      "unknown material": text.replace("[sweep]", "[sweep]\nmaterials = ['wool']"),
-                     "address": text}[case])
+                     "address": text,
+                     "unknown garment": text.replace('garments = ["short-skirt"', 'garments = ["poncho"'),
+                     "missing motion file": text + "\n[[jobs]]\ngarment = 'short-skirt'\nmotion = 'gone/dance.npz'\n",
+                     }[case])
     if case == "missing":
         spec.unlink()
     args = ["batch", spec, "-o", tmp_path / "out"] + (["--address", "127.0.0.1:9"] if case == "address" else [])
+    args += ["--list"] if listing else []
     code, out, err = run_darts(*args)
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and problem in err, err
     assert err.startswith("darts: error: ") and not (tmp_path / "out").exists()
+
+
+def test_listing_a_batch_writes_nothing(tmp_path, run_darts):
+    code, stdout, _ = run_darts("batch", EXAMPLE, "-o", tmp_path / "out", "--list")
+    assert code == 0 and "darts-sim" in stdout and not (tmp_path / "out").exists()

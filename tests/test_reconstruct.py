@@ -39,7 +39,7 @@ def test_classify_names_the_sample_garment(run_darts, mask):
 
 def test_the_garment_alone_hides_everything_outside_its_mask():
     """With a mask the classifier's input outside it is one grey whatever the background."""
-    from darts.regress.data import read_image
+    from darts.fileio import read_image
     from darts.regress.pipeline import network_input, network_mask
     from darts.regress.train import NEUTRAL, garment_only
 
@@ -70,6 +70,37 @@ def test_reconstruct_then_simulate_the_sample(run_darts, tmp_path):
     assert dart.category == META["category"] and len(dart.seams) > 0 and np.allclose(dart.body_betas, META["betas"], atol=1e-4)
     assert data["crdl"]["penetration"] <= 0.01 and data["crdl"]["handle_rmse"] < 0.01
     assert usd.is_file() and "wrote" in stdout
+
+
+def _png_header(path, width: int, height: int) -> None:
+    """A PNG whose header says ``width`` x ``height`` pixels, with no image data: what a decompression
+    bomb shows before it is decoded."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+                     + chunk(b"IDAT", zlib.compress(b"")) + chunk(b"IEND", b""))
+
+
+@pytest.mark.parametrize("command, where", [("reconstruct", "image"), ("classify", "image"), ("classify", "mask"),
+                                            ("reconstruct", "mask")])
+@pytest.mark.parametrize("size", [20000, 10000])
+def test_huge_images_are_refused_before_they_are_decoded(command, where, size, tmp_path, run_darts):
+    """A 20000 x 20000 (400 megapixel) or 10000 x 10000 header, as the picture or as its mask: one
+    line naming the file and its size, exit 2, nothing written (PIL alone raised its decompression
+    bomb error, or decoded 100 megapixels into 3 GB)."""
+    huge = tmp_path / "huge.png"
+    _png_header(huge, size, size)
+    image, mask = (huge, SAMPLE / "mask.png") if where == "image" else (SAMPLE / "image.png", huge)
+    out = tmp_path / "garment.npz"
+    extra = ["-o", out, "--camera", SAMPLE / "camera.json"] if command == "reconstruct" else []
+    code, stdout, err = run_darts(command, image, "--mask", mask, *extra)
+    assert code == 2 and stdout == "" and len(err.strip().splitlines()) == 1, err
+    assert f"huge.png: the image is {size}x{size} pixels" in err and "at most 64 megapixels" in err, err
+    assert list(tmp_path.iterdir()) == [huge]
 
 
 @pytest.mark.parametrize("case, problem", [

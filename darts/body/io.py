@@ -86,6 +86,9 @@ def _plain(value, key: str, source) -> np.ndarray:
 
 
 def _read_pkl(path: Path) -> dict:
+    with open(path, "rb") as handle:
+        if handle.read(4) == b"PK\x03\x04":
+            raise DartsInputError(path, "is a zip archive (an .npz?), not a pickle: name it .npz")
     try:
         with open(path, "rb") as handle:
             data = _SMPLUnpickler(handle, encoding="latin1").load()

@@ -14,7 +14,7 @@ SIM_SUFFIXES = (".usd", ".usda", ".usdc")
 
 
 def _image(path: str):
-    from darts.regress.data import read_image
+    from darts.fileio import read_image
 
     return read_image(path)
 

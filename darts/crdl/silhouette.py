@@ -19,15 +19,9 @@ SIGMA = 1.0  # pixels: the width of a triangle's soft edge
 def read_mask(path: str | os.PathLike, width: int, height: int, of: str = "the camera") -> np.ndarray:
     """A garment mask image as bool [height, width] (garment where the grey level is above half);
     a DartsInputError when it is not ``width`` x ``height`` (the size of ``of``) or empty."""
-    from PIL import Image, UnidentifiedImageError
+    from darts.fileio import read_image
 
-    try:
-        with Image.open(path) as image:
-            grey = np.asarray(image.convert("L"), np.float64) / 255.0
-    except FileNotFoundError:
-        raise DartsInputError(path, "no such file") from None
-    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:  # PIL's errors for damaged files
-        raise DartsInputError(path, f"not an image ({exc})") from None
+    grey = read_image(path, "L").astype(np.float64) / 255.0
     if grey.shape != (height, width):
         raise DartsInputError(path, f"the mask is {grey.shape[1]}x{grey.shape[0]} pixels but {of} is {width}x{height}")
     mask = grey > 0.5

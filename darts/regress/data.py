@@ -89,22 +89,9 @@ class Samples:
                        pick(self.initial), pick(self.line_mask), pick(self.creases))
 
 
-def read_image(path: Path, mode: str = "RGB") -> np.ndarray:
-    """An image file as an array ([H,W,3] uint8 for RGB, [H,W] for L), or a DartsInputError."""
-    from PIL import Image, UnidentifiedImageError
-
-    try:
-        with Image.open(path) as image:
-            return np.asarray(image.convert(mode))
-    except FileNotFoundError:
-        raise DartsInputError(path, "no such file") from None
-    except (UnidentifiedImageError, OSError, ValueError) as exc:
-        raise DartsInputError(path, f"not an image ({exc})") from None
-
-
 def load_split(root: str | Path, split: str, limit: int | None = None) -> Samples:
     """The samples of ``root/split`` (sorted by id; the first ``limit`` if given)."""
-    from darts.fileio import read_npz
+    from darts.fileio import read_image, read_npz
 
     folders = sorted(p for p in (Path(root) / split).glob("*") if (p / "image.png").is_file())[:limit]
     if not folders:

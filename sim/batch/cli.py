@@ -33,11 +33,11 @@ def batch(args) -> int:
         raise DartsInputError(None, f"--workers must be >= 1, got {args.workers}")
     if args.address:
         check_address(args.address)
-    check_out_dir(out)
-    if args.list:
+    if args.list:  # writes nothing, not even OUT_DIR
         for job in jobs:
             print(f"{job.id}\n  {job.inputs['command']}")
         return 0
+    check_out_dir(out)
     rows = run_jobs(jobs, args.output, run_simulation, workers=args.workers, address=args.address, retry=args.retry)
     print(_table(rows))
     failed = [row for row in rows if row["status"] != "ok"]

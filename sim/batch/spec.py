@@ -6,9 +6,10 @@ settings, each combination one ``darts-sim`` run, plus explicit jobs.
     [[jobs]]   explicit jobs (garment, motion, body, material, seams, and sim settings of their own)
 
 Relative paths are relative to the SPEC's folder; names of shipped garments and motions stay names.
-Everything is checked here, once, before any job runs: the keys, their types, and each job's
-darts-sim command line (parsed and its settings range-checked by darts-sim itself). Whether a
-garment or motion file can be read is each job's own business: a broken file fails that job only.
+Everything is checked here, once, before any job runs: the keys, their types, that every garment
+and motion names a file or a shipped one, and each job's darts-sim command line (parsed and its
+settings range-checked by darts-sim itself). Whether a garment or motion file can be read is each
+job's own business: a broken file fails that job only.
 """
 from __future__ import annotations
 
@@ -108,11 +109,19 @@ class _Checker:
             self.fail(where, f"must be a number, got {value!r}")
         return float(value)
 
-    def input_path(self, value, where: str) -> str:
-        """A shipped name stays as it is; anything that looks like a path is made absolute."""
+    def input_path(self, value, where: str, kind: str | None = None) -> str:
+        """A shipped name stays as it is; anything that looks like a path is made absolute. A
+        ``kind`` ("garment", "motion") must name a file or a shipped one of that kind."""
         text = self.text(value, where)
         if "/" in text or text.endswith(".npz") or text.endswith(".pkl"):
-            return str((self.folder / text).resolve()) if not os.path.isabs(text) else text
+            text = str((self.folder / text).resolve()) if not os.path.isabs(text) else text
+        if kind is not None:
+            from scenes import resolve_garment, resolve_motion
+
+            try:
+                (resolve_garment if kind == "garment" else resolve_motion)(text)
+            except DartsInputError as exc:
+                self.fail(where, f"{text}: {exc.problem}")
         return text
 
     def body(self, value, where: str) -> Body:
@@ -232,8 +241,8 @@ def load_jobs(path: str | os.PathLike) -> list[Job]:
         for key in ("garments", "motions"):
             if key not in sweep:
                 check.fail("sweep", f"needs '{key}'")
-        garments = [check.input_path(g, "sweep.garments") for g in check.items(sweep["garments"], "sweep.garments")]
-        motions = [check.input_path(m, "sweep.motions") for m in check.items(sweep["motions"], "sweep.motions")]
+        garments = [check.input_path(g, "sweep.garments", "garment") for g in check.items(sweep["garments"], "sweep.garments")]
+        motions = [check.input_path(m, "sweep.motions", "motion") for m in check.items(sweep["motions"], "sweep.motions")]
         bodies = [check.body(b, "sweep.bodies") for b in check.items(sweep.get("bodies", ["mean"]), "sweep.bodies")]
         materials = [None if m == "own" else check.text(m, "sweep.materials")
                      for m in check.items(sweep.get("materials", ["own"]), "sweep.materials")]
@@ -250,8 +259,8 @@ def load_jobs(path: str | os.PathLike) -> list[Job]:
             if key not in entry:
                 check.fail(where, f"needs '{key}'")
         seams = check.seams(entry.get("seams", []), f"{where}.seams")
-        jobs.append(_job(check.input_path(entry["garment"], f"{where}.garment"),
-                         check.input_path(entry["motion"], f"{where}.motion"),
+        jobs.append(_job(check.input_path(entry["garment"], f"{where}.garment", "garment"),
+                         check.input_path(entry["motion"], f"{where}.motion", "motion"),
                          check.body(entry.get("body", "mean"), f"{where}.body"),
                          None if entry.get("material", "own") == "own" else check.text(entry["material"], f"{where}.material"),
                          seams, {**base, **check.sim(entry.get("sim", {}), f"{where}.sim")}, check, where))
