@@ -17,6 +17,11 @@ def shipped_garments() -> list[str]:
     return sorted(p.stem for p in GARMENTS_DIR.glob("*.npz"))
 
 
+def garment_help() -> str:
+    """What a GARMENT argument takes, for a command's --help."""
+    return f"a garment.npz (a DART) or a shipped garment: {', '.join(shipped_garments())}"
+
+
 def _resolve(name_or_path: str, folder: Path, kind: str) -> Path:
     path = Path(name_or_path)
     if path.exists() or path.is_symlink():  # a link that leads nowhere is the loader's to explain

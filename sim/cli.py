@@ -26,7 +26,7 @@ from darts.motion.resample import resample
 from darts.preview import Animation, check_preview, frames_to_draw, render_preview
 from exporters.sequence import SEQUENCE_FORMATS, MeshSequenceWriter
 from exporters.usd import USD_SUFFIXES, UsdAnimationWriter
-from scenes import resolve_garment, resolve_motion
+from scenes import garment_help, resolve_garment, resolve_motion, shipped_motions
 from sim.body_track import build_body_track
 from sim.run import simulate, summary
 from sim.settings import SimSettings
@@ -51,8 +51,8 @@ def parser() -> argparse.ArgumentParser:
         description="Simulate a DART garment on a body posed by an AMASS motion (Warp cloth solver). "
                     "Output frames are in the AMASS world frame: Z up, metres.")
     p.add_argument("--version", action="version", version=f"darts-sim {__version__}")
-    p.add_argument("garment", metavar="GARMENT", help="garment.npz (a DART) or a shipped garment name")
-    p.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
+    p.add_argument("garment", metavar="GARMENT", help=garment_help())
+    p.add_argument("motion", metavar="MOTION", help=f"AMASS .npz or a shipped motion: {', '.join(shipped_motions())}")
     p.add_argument("-o", "--output", metavar="OUT", required=True,
                    help="OUT.usd/.usda/.usdc, or a directory for an OBJ/PLY sequence (see --format)")
     p.add_argument("--format", choices=SEQUENCE_FORMATS, default="obj", help="mesh sequence format (default obj)")
@@ -273,7 +273,8 @@ def _check_device(device: str) -> None:
 
 def _print_summary(stats: dict, output: str | None) -> None:
     gaps = ", ".join(f"{name} {gap * 1e3:.2f}" for name, gap in stats["max_seam_gap"].items())
-    print(f"{len(stats['frames'])} frames, {stats['particles']} particles, {stats['solver']} "
+    settle = stats["simulated_frames"] - len(stats["frames"])
+    print(f"{len(stats['frames'])} frames recorded after {settle} settle frames, {stats['particles']} particles, {stats['solver']} "
           f"{stats['substeps']} substeps x {stats['iterations']} iterations at {stats['fps']:g} fps")
     print(f"wall {stats['wall_seconds']:.1f} s, {stats['sim_fps']:.2f} simulated frames/s, "
           f"max penetration {100 * stats['max_penetration']:.2f} % of vertices, max speed {stats['max_speed']:.2f} m/s")

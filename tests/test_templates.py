@@ -172,6 +172,22 @@ def test_inspect_reports_and_draws(run_darts, tmp_path):
     assert image[:8] == b"\x89PNG\r\n\x1a\n" and len(image) > 10_000
 
 
+def test_commands_taking_a_garment_accept_shipped_names_and_list_them(run_darts, tmp_path, capsys):
+    """darts inspect / export / deform take a shipped name like darts-sim; --help lists the names."""
+    code, out, _ = run_darts("inspect", "short-skirt", "--json")
+    assert code == 0 and json.loads(out)["category"] == "short-skirt"
+    code, _, _ = run_darts("export", "short-skirt", "-o", tmp_path / "skirt.obj")
+    assert code == 0 and (tmp_path / "skirt.obj").is_file()
+    for command in ("inspect", "export", "deform"):
+        with pytest.raises(SystemExit) as done:
+            run_darts(command, "--help")
+        out = capsys.readouterr().out
+        assert done.value.code == 0 and "shipped garment" in out and "tshirt-collar-tie" in "".join(out.split()), command
+    from sim.cli import parser
+
+    assert "short-sleeve-dress" in "".join(parser().format_help().split())
+
+
 @pytest.mark.parametrize("suffix", [".obj", ".ply", ".glb"])
 def test_export_mesh_with_panel_colours(run_darts, tmp_path, suffix):
     out = tmp_path / f"skirt{suffix}"

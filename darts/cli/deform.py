@@ -11,6 +11,7 @@ from darts.dart.io import load_dart, save_dart
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
 from darts.templates.build import DEFAULT_EASE
+from scenes import garment_help, resolve_garment
 
 
 def deform(args) -> int:
@@ -21,7 +22,7 @@ def deform(args) -> int:
     check_output(args.output, (".npz",))
     if args.report:
         check_output(args.report)
-    dart = load_dart(args.garment)
+    dart = load_dart(resolve_garment(args.garment))
     body = load_body(args.body)
     if body.name != dart.body_model:
         raise DartsInputError(args.garment, f"was made for the body '{dart.body_model}', not '{body.name}' (pass it with --body)")
@@ -55,7 +56,7 @@ def add_parser(groups) -> None:
         "deform", help="deform a DART so that its feature lines reach target lines (the CRDL)",
         description="Deform a DART with the Constrained Rigid Deformation Layer: as rigid as possible (ARAP), "
                     "feature lines on their targets, outside the body. Targets come from --lines or from --edit.")
-    parser.add_argument("garment", metavar="GARMENT.npz")
+    parser.add_argument("garment", metavar="GARMENT", help=garment_help())
     parser.add_argument("-o", "--output", required=True, metavar="OUT.npz", help="the deformed DART")
     parser.add_argument("--lines", metavar="LINES.npz",
                         help="target loops: one [K,3] array per line name (canonical frame, Y up, metres)")

@@ -16,6 +16,7 @@ from darts.fileio import atomic_path, check_output
 from darts.geometry.mesh import loop_length, vertex_normals
 from darts.templates.build import DEFAULT_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
+from scenes import garment_help, resolve_garment
 
 
 def template(args) -> int:
@@ -81,7 +82,7 @@ def render_png(dart: Dart, path) -> None:
 def inspect(args) -> int:
     if args.png:
         check_output(args.png, (".png",))
-    dart = load_dart(args.garment)
+    dart = load_dart(resolve_garment(args.garment))
     info = summary(dart)
     if args.png:
         render_png(dart, args.png)
@@ -105,7 +106,7 @@ def inspect(args) -> int:
 
 def export(args) -> int:
     check_output(args.output, MESH_FORMATS)
-    dart = load_dart(args.garment)
+    dart = load_dart(resolve_garment(args.garment))
     export_mesh(dart, args.output)
     print(f"wrote {args.output}: {len(dart.vertices)} vertices, {len(dart.panel_names)} panel colours")
     return 0
@@ -127,12 +128,12 @@ def add_parsers(groups, add_body_args) -> None:
     make.set_defaults(run=template)
 
     show = groups.add_parser("inspect", help="counts, panels, seams and feature lines of a DART")
-    show.add_argument("garment", metavar="GARMENT.npz")
+    show.add_argument("garment", metavar="GARMENT", help=garment_help())
     show.add_argument("--json", action="store_true", help="print JSON")
     show.add_argument("--png", metavar="OUT.png", help="also draw the garment, panels coloured, seams dotted")
     show.set_defaults(run=inspect)
 
     out = groups.add_parser("export", help=f"write a DART as a mesh ({', '.join(MESH_FORMATS)}) with panel colours")
-    out.add_argument("garment", metavar="GARMENT.npz")
+    out.add_argument("garment", metavar="GARMENT", help=garment_help())
     out.add_argument("-o", "--output", required=True, metavar="OUT")
     out.set_defaults(run=export)
