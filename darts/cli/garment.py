@@ -55,26 +55,47 @@ def summary(dart: Dart) -> dict:
 
 
 def render_png(dart: Dart, path) -> None:
-    """Front and back views, panels coloured, seam pairs drawn as dots."""
+    """Front and back views, panels coloured, feature lines drawn in colour and seam pairs as black
+    dots where they face the viewer, one legend for all; the figure takes the garment's proportions."""
+    from matplotlib import colormaps
+    from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Rectangle
 
     from darts.render import BACK, FRONT, draw_mesh
 
     palette = panel_colors(len(dart.panel_names))
-    colors = palette[dart.panel]
     vertices = dart.vertices.astype(np.float64)
     normals = vertex_normals(vertices, dart.faces.astype(np.int64))
-    fig = Figure(figsize=(10, 6))
+    width = max(np.ptp(vertices @ right) for right, _ in (FRONT, BACK))
+    height = np.ptp(vertices @ FRONT[1])
+    entries = len(dart.panel_names) + len(dart.lines) + 1
+    title, legend = 0.4, 0.25 * -(-entries // 6) + 0.2  # inches above and below the views
+    view = 4.8 * height / width  # inches: each view 4.8 in wide, as tall as the garment's proportions
+    fig = Figure(figsize=(10, view + title + legend))
+    fig.subplots_adjust(left=0.01, right=0.99, wspace=0.04, top=1 - title / (view + title + legend),
+                        bottom=legend / (view + title + legend))
     axes = fig.subplots(1, 2)
+    line_colors = colormaps["Dark2"](np.arange(len(dart.lines)) % 8)
     for ax, (right, up), title in zip(axes, (FRONT, BACK), ("front", "back")):
-        draw_mesh(ax, vertices, dart.faces, colors, right, up, two_sided=True)
+        draw_mesh(ax, vertices, dart.faces, palette[dart.panel], right, up, two_sided=True)
+        facing = normals @ np.cross(right, up) > 0
+        for color, loop in zip(line_colors, dart.lines.values()):
+            loop = np.asarray(loop)
+            segments = np.stack([loop, np.roll(loop, -1)], 1)
+            segments = segments[facing[segments].all(1)]
+            ax.add_collection(LineCollection(np.stack([vertices[segments] @ right, vertices[segments] @ up], -1),
+                                             colors=[color], linewidths=2.0))
         ends = dart.pairs[:, 0]
-        visible = normals[ends] @ np.cross(right, up) > 0
-        ax.scatter(vertices[ends[visible]] @ right, vertices[ends[visible]] @ up, s=2, c="k")
+        ends = ends[facing[ends]]
+        ax.scatter(vertices[ends] @ right, vertices[ends] @ up, s=2, c="k")
         ax.set_title(f"{dart.category} ({title})")
     handles = [Rectangle((0, 0), 1, 1, color=c) for c in palette]
-    fig.legend(handles, dart.panel_names, loc="lower center", ncol=min(len(handles), 6), fontsize=8, frameon=False)
+    handles += [Line2D([], [], color=c, linewidth=2.0) for c in line_colors]
+    handles.append(Line2D([], [], linestyle="none", marker="o", markersize=3, color="k"))
+    labels = dart.panel_names + [f"{name} (line)" for name in dart.lines] + ["seam pairs"]
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(handles), 6), fontsize=8, frameon=False)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=90, bbox_inches="tight", format="png")
 
