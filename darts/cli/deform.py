@@ -38,7 +38,7 @@ def deform(args) -> int:
         edits = [parse_edit(text) for text in args.edit]
         targets, clearance = edit_targets(dart.category, garment.vertices, garment.lines, edits), DEFAULT_EASE
     weights = CrdlWeights(silhouette=args.silhouette_weight if silhouette is not None else 0.0)
-    options = {"progress": True} if args.solver == "adam" else {}
+    options = {"progress": True}
     deformed, report = deform_dart(dart, body, targets, args.solver, weights, silhouette, clearance=clearance, **options)
     save_dart(deformed, args.output)
     if args.report:

@@ -66,7 +66,7 @@ def reconstruct(args) -> int:
         raise DartsInputError(None, f"--betas has {len(args.betas)} values, the body has {body.num_betas}")
     if not 0.003 <= args.edge_length <= 0.1:
         raise DartsInputError(None, f"--edge-length must be in [0.003, 0.1] m, got {args.edge_length}")
-    result = run(image, body, args.category, camera, mask, betas=args.betas, edge_length=args.edge_length)
+    result = run(image, body, args.category, camera, mask, betas=args.betas, edge_length=args.edge_length, progress=True)
     if mask is None:
         result.report["note"] = ("no --mask: the CRDL fitted the regressed lines only, without its silhouette term; "
                                  "give the garment's mask (white = garment, the image's size) from any segmenter to use it")

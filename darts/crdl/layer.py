@@ -128,6 +128,7 @@ class Crdl:
                  surface: FitSurface | None = None, weights: CrdlWeights | None = None, silhouette=None,
                  handle_weights: np.ndarray | None = None):
         self.weights = weights or CrdlWeights()
+        self._bar = None  # the progress bar of a solve_local_global in progress
         self.system = arap_system(vertices, faces)
         self.faces = np.asarray(faces, np.int64)
         self.handles = torch.as_tensor(np.asarray(handles, np.int64))
@@ -276,6 +277,9 @@ class Crdl:
                 pairs = (pairs + [(step, change, 1.0 / curvature)])[-memory:]
             p, value, g = new_p, new_value, new_g
             history.append(float(value))
+            if self._bar is not None:
+                self._bar.update(1)
+                self._bar.set_postfix(E=f"{float(value):.4g}", refresh=False)
             if len(history) > STALL_WINDOW and (history[-1 - STALL_WINDOW] - history[-1]
                                                 < STALL_WINDOW * tolerance * abs(history[-1])):
                 break
@@ -348,12 +352,21 @@ class Crdl:
             history = history + steps
         return p, history, in_contact, len(lost)
 
-    def solve_local_global(self, targets: np.ndarray, iterations: int = 300, tolerance: float = TOLERANCE) -> CrdlResult:
-        """The fast default (see ``_local_global``)."""
+    def solve_local_global(self, targets: np.ndarray, iterations: int = 300, tolerance: float = TOLERANCE,
+                           progress: bool = False) -> CrdlResult:
+        """The fast default (see ``_local_global``); ``progress`` shows a bar of the steps taken
+        (at most ``iterations``) and the energy E."""
+        from tqdm import tqdm
+
         start = time.perf_counter()
         target = torch.as_tensor(np.asarray(targets, np.float64))
-        with torch.no_grad():
-            p, done, history = self._local_global(target, iterations, tolerance)
+        self._bar = tqdm(total=iterations, desc="crdl", unit="step", disable=not progress, leave=False)
+        try:
+            with torch.no_grad():
+                p, done, history = self._local_global(target, iterations, tolerance)
+        finally:
+            self._bar.close()
+            self._bar = None
         return self._result(p, target, done, start, history)
 
     def solve_adam(self, targets: np.ndarray, iterations: int = 2000, learning_rate: float = 1e-3,

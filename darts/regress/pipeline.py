@@ -97,9 +97,11 @@ class Reconstruction:
 
 
 def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
-                mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH) -> Reconstruction:
+                mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH,
+                progress: bool = False) -> Reconstruction:
     """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
-    switches the CRDL's silhouette term on and shows the classifier the garment alone."""
+    switches the CRDL's silhouette term on and shows the classifier the garment alone; ``progress``
+    shows the CRDL's steps."""
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
     from darts.crdl.silhouette import Silhouette
@@ -125,7 +127,7 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     silhouette = None if mask is None else Silhouette(mask, camera)
     weights = CrdlWeights(silhouette=1.0 if silhouette is not None else 0.0)
     mark = time.perf_counter()
-    dart, crdl = deform_dart(template, body, lines, "local-global", weights, silhouette)
+    dart, crdl = deform_dart(template, body, lines, "local-global", weights, silhouette, progress=progress)
     times["crdl_s"] = time.perf_counter() - mark
     times["total_s"] = time.perf_counter() - started
     report = {"category": category, "probability": probability,
