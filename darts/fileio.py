@@ -53,11 +53,37 @@ def _alive(pid: int) -> bool:
     return True
 
 
+#: What a ``Janitor`` runs: wait until the pipe from its writer closes (the writer finished, or died,
+#: SIGKILL included: the kernel closes a dead process's files), then remove the path if it is still there.
+_JANITOR = ("import os, shutil, sys\nsys.stdin.buffer.read()\npath = sys.argv[1]\n"
+            "shutil.rmtree(path, ignore_errors=True) if os.path.isdir(path) else os.path.exists(path) and os.unlink(path)")
+
+
+class Janitor:
+    """A helper process that removes a temporary file or folder if this process dies before
+    ``release`` (after the temporary was renamed into place, or removed, it finds nothing to do).
+    For the outputs of long runs, so that a SIGKILL leaves nothing beside them."""
+
+    def __init__(self, path: str | os.PathLike):
+        import subprocess
+        import sys
+
+        self._helper = subprocess.Popen([sys.executable, "-I", "-S", "-c", _JANITOR, os.fspath(path)],
+                                        stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                        start_new_session=True)  # Ctrl-C to this process group spares it
+
+    def release(self) -> None:
+        if self._helper.stdin and not self._helper.stdin.closed:
+            self._helper.stdin.close()
+            self._helper.wait()
+
+
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike, keep_suffix: bool = False):
+def atomic_path(path: str | os.PathLike, keep_suffix: bool = False, janitor: bool = False):
     """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds.
-    With ``keep_suffix`` the temporary name ends like ``path`` (for writers that go by extension).
-    Temporaries of earlier writers that were killed are removed first."""
+    With ``keep_suffix`` the temporary name ends like ``path`` (for writers that go by extension);
+    with ``janitor`` a ``Janitor`` removes it if this process is killed meanwhile. Temporaries of
+    earlier writers that were killed are removed first."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(path)
@@ -67,12 +93,15 @@ def atomic_path(path: str | os.PathLike, keep_suffix: bool = False):
     umask = os.umask(0)
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual permissions
+    helper = Janitor(tmp) if janitor else None
     try:
         yield Path(tmp)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if helper is not None:
+            helper.release()
 
 
 def check_input_file(path: str | os.PathLike, kind: str) -> Path:

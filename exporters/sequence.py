@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from darts.errors import DartsInputError
-from darts.fileio import remove_stale_temporaries, temporary_prefix
+from darts.fileio import Janitor, remove_stale_temporaries, temporary_prefix
 from exporters.streaming import StreamingWriter
 
 SEQUENCE_FORMATS = ("obj", "ply")
@@ -34,6 +34,7 @@ class MeshSequenceWriter(StreamingWriter):
         remove_stale_temporaries(self.path)
         self.fps, self.format = float(fps), file_format
         self._tmp = Path(tempfile.mkdtemp(prefix=temporary_prefix(self.path), dir=self.path.parent))
+        self._janitor = Janitor(self._tmp)  # removes the folder if this process is killed
         self._meshes: dict[str, tuple[np.ndarray, np.ndarray | None]] = {}
         self.frames_written = 0
 
@@ -59,6 +60,8 @@ class MeshSequenceWriter(StreamingWriter):
         if self.path.exists():
             shutil.rmtree(self.path)
         self._tmp.rename(self.path)
+        self._janitor.release()
 
     def discard(self) -> None:
         shutil.rmtree(self._tmp, ignore_errors=True)
+        self._janitor.release()

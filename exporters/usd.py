@@ -49,7 +49,7 @@ class UsdAnimationWriter(StreamingWriter):
             raise DartsInputError(None, f"fps must be positive, got {fps}")
         self._geom, self._sdf, self._vt = UsdGeom, Sdf, Vt
         self._stack = ExitStack()
-        self._tmp = self._stack.enter_context(atomic_path(self.path, keep_suffix=True))
+        self._tmp = self._stack.enter_context(atomic_path(self.path, keep_suffix=True, janitor=True))
         os.unlink(self._tmp)  # USD creates the layer itself
         self.stage = Usd.Stage.CreateNew(str(self._tmp))
         UsdGeom.SetStageUpAxis(self.stage, UsdGeom.Tokens.z)

@@ -251,11 +251,11 @@ def _darts_sim(*args):
                             stderr=subprocess.PIPE, text=True)
 
 
-def _wait_for_temporary(folder, deadline=120):
+def _wait_for_temporary(folder, name="out.usdc", deadline=120):
     end = time.time() + deadline
-    while time.time() < end and not list(folder.glob(".out.usdc.*")):
+    while time.time() < end and not list(folder.glob(f".{name}.*")):
         time.sleep(0.05)
-    return list(folder.glob(".out.usdc.*"))
+    return list(folder.glob(f".{name}.*"))
 
 
 def test_interrupted_and_killed_runs_leave_nothing_half_written(tmp_path):
@@ -266,11 +266,17 @@ def test_interrupted_and_killed_runs_leave_nothing_half_written(tmp_path):
     _, err = run.communicate(timeout=60)
     assert run.returncode == 130 and err.strip().splitlines()[-1] == "darts-sim: interrupted", err
     assert not out.exists() and not list(tmp_path.glob(".out.usdc.*"))
-    killed = _darts_sim(SKIRT, SQUAT, "-o", out, "--frames", "60", "--quiet")
-    left = _wait_for_temporary(tmp_path)
-    killed.kill()
-    killed.wait()
-    assert left and not out.exists() and all(p.name.startswith(temporary_prefix(out).rsplit("-", 2)[0]) for p in left)
+    for output in (out, tmp_path / "frames"):  # a USD file, and a folder of an OBJ sequence
+        killed = _darts_sim(SKIRT, SQUAT, "-o", output, "--frames", "60", "--quiet")
+        left = _wait_for_temporary(tmp_path, output.name)
+        time.sleep(1.0)  # well into the run
+        killed.kill()
+        killed.wait()
+        assert left and not output.exists()
+        assert all(p.name.startswith(temporary_prefix(output).rsplit("-", 2)[0]) for p in left)
+        deadline = time.monotonic() + 10  # the janitor process notices its writer is gone
+        while any(p.exists() for p in left) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not [p for p in left if p.exists()], "the killed run's temporary was left behind"
     again = _darts_sim(SKIRT, SQUAT, "-o", out, "--frames", "2", "--quiet")
     assert again.wait(timeout=300) == 0 and out.exists()
-    assert not [p for p in left if p.exists()], "the killed run's temporary file was not cleaned up"
