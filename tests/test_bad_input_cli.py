@@ -247,8 +247,11 @@ def test_darts_sim_has_a_version(capsys):
 
 
 def _darts_sim(*args):
+    """darts-sim in a child process with SIGINT's default disposition: a test run started in the
+    background by a shell inherits SIGINT ignored, and Python then never turns it into Ctrl-C."""
     return subprocess.Popen([sys.executable, "-m", "sim.cli", *map(str, args)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def _wait_for_frames(run, frames: int, deadline=120) -> str:
