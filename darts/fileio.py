@@ -93,8 +93,9 @@ def atomic_path(path: str | os.PathLike, keep_suffix: bool = False, janitor: boo
     umask = os.umask(0)
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual permissions
-    helper = Janitor(tmp) if janitor else None
+    helper = None
     try:
+        helper = Janitor(tmp) if janitor else None  # inside: a failed start still removes the temporary
         yield Path(tmp)
         os.replace(tmp, path)
     finally:
