@@ -32,7 +32,7 @@ from darts.body.io import load_body
 from darts.dart.io import load_dart
 from darts.geometry.warp_runtime import warp
 from darts.motion.amass import load_motion
-from scenes import resolve_garment, resolve_motion
+from darts.shipped import resolve_garment, resolve_motion
 from sim import kernels
 from sim.body_track import build_body_track
 from sim.model import cloth_model

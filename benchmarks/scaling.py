@@ -25,7 +25,7 @@ from darts.dart.build import make_dart
 from darts.dart.io import load_dart, save_dart
 from darts.geometry.warp_runtime import warp
 from darts.motion.amass import load_motion
-from scenes import resolve_motion
+from darts.shipped import resolve_motion
 from sim.body_track import build_body_track
 from sim.model import cloth_model
 from sim.settings import SimSettings

@@ -1,46 +1,7 @@
-"""Shipped inputs: AMASS-format motions (``scenes/motions``) and DART garments (``scenes/garments``)."""
-from __future__ import annotations
-
+"""Shipped inputs, as data only: AMASS-format motions (``scenes/motions``), DART garments
+(``scenes/garments``), batch specs and reconstruction examples. ``darts.shipped`` resolves their
+names; this package imports nothing of ``darts`` (the dependency runs one way)."""
 from pathlib import Path
 
 MOTIONS_DIR = Path(__file__).parent / "motions"
 GARMENTS_DIR = Path(__file__).parent / "garments"
-
-
-def shipped_motions() -> list[str]:
-    """Names of the shipped motions (``walk``, ``run``, ...)."""
-    return sorted(p.stem for p in MOTIONS_DIR.glob("*.npz"))
-
-
-def shipped_garments() -> list[str]:
-    """Names of the shipped DARTs (``short-sleeve-top``, ...)."""
-    return sorted(p.stem for p in GARMENTS_DIR.glob("*.npz"))
-
-
-def garment_help() -> str:
-    """What a GARMENT argument takes, for a command's --help."""
-    return f"a garment.npz (a DART) or a shipped garment: {', '.join(shipped_garments())}"
-
-
-def _resolve(name_or_path: str, folder: Path, kind: str) -> Path:
-    path = Path(name_or_path)
-    if path.exists() or path.is_symlink():  # a link that leads nowhere is the loader's to explain
-        return path
-    if (folder / f"{name_or_path}.npz").is_file():
-        return folder / f"{name_or_path}.npz"
-    from darts.errors import DartsInputError
-
-    names = sorted(p.stem for p in folder.glob("*.npz"))
-    raise DartsInputError(path, f"neither a file nor a shipped {kind} (shipped: {', '.join(names)})")
-
-
-def resolve_motion(name_or_path: str) -> Path:
-    """A motion path: the argument itself if it is a file, else the shipped motion of that name;
-    a DartsInputError listing the shipped motions when it is neither."""
-    return _resolve(name_or_path, MOTIONS_DIR, "motion")
-
-
-def resolve_garment(name_or_path: str) -> Path:
-    """A garment path: the argument itself if it is a file, else the shipped DART of that name; a
-    DartsInputError listing the shipped garments when it is neither."""
-    return _resolve(name_or_path, GARMENTS_DIR, "garment")

@@ -81,8 +81,8 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
     from darts.raycast import cast
     from darts.regress.data import read_image
     from darts.regress.pipeline import reconstruct
-    from darts.templates.build import DATASET_EDGE_LENGTH
-    from sim.cli import execute, parser
+    from darts.templates.defaults import DATASET_EDGE_LENGTH
+    from sim.api import simulate
 
     sample = Path(job.inputs["sample"])
     meta = json.loads((sample / "meta.json").read_text())
@@ -105,8 +105,7 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
                 "mask_iou": float((render & mask).sum() / max((render | mask).sum(), 1))}
 
     save_dart(result.dart, folder / "garment.npz")
-    outcome = execute(parser().parse_args([str(folder / "garment.npz"), "walk", "-o", str(folder / "walk.usdc"),
-                                           "--frames", "30", "--quiet"]))
+    outcome = simulate(result.dart, "walk", output=str(folder / "walk.usdc"), frames=30, keep_frames=False)
     return {"category": meta["category"], "predicted": result.report["category"],
             "probability": result.report["probability"], "times": result.report["times"],
             "ours": measure(result.dart), "template": measure(baseline),

@@ -43,7 +43,7 @@ def run_one(job: tuple[str, str, str]) -> dict:
         keep = track.settle_frames + int(REGIME_SECONDS * settings.fps)
         track.vertices, track.pelvis = track.vertices[:keep], track.pelvis[:keep]
     result = simulate(dart, track, settings, winding=True)
-    stats = summary(result, settings, len(dart.vertices))
+    stats = summary(result, len(dart.vertices))
     frames = result.frames
     gaps = [gap for frame in frames for gap in frame["seam_gap"].values()]
     row = {"garment": garment, "motion": motion, "regime": regime, "particles": result.particles,
@@ -88,7 +88,7 @@ def markdown(rows: list[dict]) -> str:
 
 
 def main() -> None:
-    from scenes import shipped_garments, shipped_motions
+    from darts.shipped import shipped_garments, shipped_motions
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--jobs", type=int, default=2)

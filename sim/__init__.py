@@ -1,1 +1,9 @@
-"""The Warp cloth solver (XPBD / mass-spring) that simulates DARTs on posed bodies. In progress."""
+"""The Warp cloth solver (XPBD / mass-spring) that simulates DARTs on posed bodies.
+
+``sim.simulate(garment, motion, ...)`` is the library entry point (``sim.api``); names load on first
+use, so ``import sim`` costs nothing until one is asked for.
+"""
+from darts.lazy import lazy_exports
+
+__getattr__, __all__ = lazy_exports(__name__, {
+    "simulate": "api", "run_job": "api", "SimJob": "api", "Simulated": "api", "SimSettings": "settings"})

@@ -1,38 +1,27 @@
 """``darts-sim GARMENT MOTION -o OUT``: drape a DART on the body and simulate it through a motion.
 
+The command's arguments make a ``sim.api.SimJob`` (``job_from_args``), run by ``sim.api.run_job``
+as the Python API and ``darts batch`` run theirs. Only the parser's own needs are imported at
+start-up: ``darts-sim --help`` loads neither Warp nor torch.
+
 Exit codes: 0 done, 2 bad input (one line, nothing written), 3 the run went unstable (the frames
 before it are written, with a message saying where it stopped).
 """
 from __future__ import annotations
 
 import argparse
-import json
+import shlex
 import sys
-from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from darts import __version__
-from darts.body.io import load_body
 from darts.cli.errors import OneLineParser, run_guarded
-from darts.dart.export import panel_colors
-from darts.dart.io import load_dart
-from darts.dart.model import MATERIALS, parse_seam_setting
-from darts.errors import DartsInputError
-from darts.fileio import atomic_path, check_output
-from darts.motion.amass import load_motion
-from darts.motion.resample import resample
-from darts.preview import Animation, check_preview, frames_to_draw, render_preview
-from exporters.sequence import SEQUENCE_FORMATS, MeshSequenceWriter
-from exporters.usd import USD_SUFFIXES, UsdAnimationWriter
-from scenes import garment_help, resolve_garment, resolve_motion, shipped_motions
-from sim.body_track import build_body_track
-from sim.run import simulate, summary
+from darts.dart.model import MATERIALS
+from darts.shipped import garment_help, motion_help
+from exporters.sequence import SEQUENCE_FORMATS
 from sim.settings import SimSettings
-from sim.solvers import solver_class, solver_names
-
-UNSTABLE_EXIT = 3
+from sim.solvers import default_substeps, solver_names
 
 
 def _vector(text: str) -> tuple[float, float, float]:
@@ -52,7 +41,7 @@ def parser() -> argparse.ArgumentParser:
                     "Output frames are in the AMASS world frame: Z up, metres.")
     p.add_argument("--version", action="version", version=f"darts-sim {__version__}")
     p.add_argument("garment", metavar="GARMENT", help=garment_help())
-    p.add_argument("motion", metavar="MOTION", help=f"AMASS .npz or a shipped motion: {', '.join(shipped_motions())}")
+    p.add_argument("motion", metavar="MOTION", help=motion_help())
     p.add_argument("-o", "--output", metavar="OUT", required=True,
                    help="OUT.usd/.usda/.usdc, or a directory for an OBJ/PLY sequence (see --format)")
     p.add_argument("--format", choices=SEQUENCE_FORMATS, default="obj", help="mesh sequence format (default obj)")
@@ -65,7 +54,7 @@ def parser() -> argparse.ArgumentParser:
     defaults = SimSettings()
     p.add_argument("--solver", choices=solver_names(), default=defaults.solver, help=f"default {defaults.solver}")
     p.add_argument("--substeps", type=int, default=None,
-                   help="substeps per frame (default: " + ", ".join(f"{k} {solver_class(k).default_substeps}" for k in solver_names()) + ")")
+                   help="substeps per frame (default: " + ", ".join(f"{k} {default_substeps(k)}" for k in solver_names()) + ")")
     p.add_argument("--iterations", type=int, default=defaults.iterations, help="XPBD sweeps per substep (default 2)")
     p.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
     p.add_argument("--body", metavar="PATH", help="SMPL/SMPL-H/SMPL-X model file (default: the bundled body)")
@@ -99,176 +88,63 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def _frame_range(args, count: int) -> tuple[int, int]:
-    end = args.end if args.end is not None else count
-    if args.frames is not None:
-        if args.frames < 1:
-            raise DartsInputError(None, f"--frames must be >= 1, got {args.frames}")
-        end = min(count, args.start + args.frames)
-    if not 0 <= args.start < end <= count:
-        raise DartsInputError(None, f"frame range [{args.start}, {end}) is empty or outside the motion's {count} frames at --fps")
-    return args.start, end
+def job_from_args(args):
+    """The ``SimJob`` that parsed ``darts-sim`` arguments describe."""
+    from sim.api import SimJob
 
-
-def check_outputs(args) -> None:
-    """Every output of the run can be written (``check_output``): ``-o`` (a USD file, or a folder
-    for a mesh sequence), ``--stats`` and ``--preview``; else a DartsInputError before any work."""
-    out = Path(args.output)
-    if out.suffix and out.suffix.lower() not in USD_SUFFIXES:
-        raise DartsInputError(out, f"output must end in {', '.join(USD_SUFFIXES)} or be a directory (no suffix)")
-    check_output(out, directory=not out.suffix)
-    if args.stats:
-        check_output(args.stats)
-    if args.preview:
-        check_preview(args.preview)
-
-
-def _writer(args):
-    out = Path(args.output)
-    if out.suffix:
-        return UsdAnimationWriter(out, args.fps)
-    return MeshSequenceWriter(out, args.fps, args.format)
-
-
-class _NothingToKeep(Exception):
-    """The run went unstable before its first recorded frame: no output is written."""
-
-    def __init__(self, result):
-        super().__init__(result.message)
-        self.result = result
-
-
-def _fill(writer, args, dart, track) -> None:
-    """Declare the body (grey) and the garment (coloured by panel) on ``writer``."""
-    writer.add_mesh("body", track.faces, track.vertices.shape[1], np.full((len(track.faces), 3), 0.8))
-    writer.add_mesh("garment", dart.faces, len(dart.vertices), panel_colors(len(dart.panel_names))[dart.panel])
-    if args.seam_curves and len(dart.pairs):
-        writer.add_curves("garment", dart.pairs)
-
-
-class _PreviewFrames:
-    """The frames a ``--preview`` will draw, kept (float32) as they are written; nothing else is kept."""
-
-    def __init__(self, args, track):
-        self.total = len(track.vertices) - track.settle_frames
-        self.wanted = set(frames_to_draw(self.total, args.preview).tolist()) if args.preview else set()
-        self.seen, self.numbers, self.garment, self.body = 0, [], [], []
-
-    def __call__(self, garment: np.ndarray, body: np.ndarray) -> None:
-        if self.seen in self.wanted:
-            self.numbers.append(self.seen)
-            self.garment.append(garment.astype(np.float32))
-            self.body.append(body.astype(np.float32))
-        self.seen += 1
-
-    def render(self, args, dart, track) -> None:
-        animation = Animation(faces={"body": np.asarray(track.faces), "garment": dart.faces},
-                              colors={"body": np.full((len(track.faces), 3), 0.8),
-                                      "garment": panel_colors(len(dart.panel_names))[dart.panel]},
-                              frames={"garment": np.stack(self.garment), "body": np.stack(self.body)},
-                              fps=args.fps, numbers=np.array(self.numbers), total=self.seen)
-        render_preview(animation, args.preview, progress=not args.quiet)
-
-
-def settings_from_args(args) -> SimSettings:
     settings = SimSettings(fps=args.fps, substeps=args.substeps, iterations=args.iterations, solver=args.solver,
                            device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed,
                            max_speed=args.max_speed, self_contact=not args.no_self_contact,
                            continuous_collision=not args.no_ccd, crease_contacts=not args.no_crease,
                            tethers=not args.no_tethers)
-    try:
-        settings.check()
-    except ValueError as exc:
-        raise DartsInputError(None, str(exc)) from None
-    if args.settle < 0 or not np.isfinite(args.settle):
-        raise DartsInputError(None, f"--settle must be >= 0 seconds, got {args.settle}")
-    return settings
+    return SimJob(args.garment, args.motion, settings, start=args.start, end=args.end, frames=args.frames,
+                  settle=args.settle, body=args.body, betas=args.betas, material=args.material, seams=tuple(args.seam),
+                  output=args.output, format=args.format, seam_curves=args.seam_curves, stats=args.stats,
+                  preview=args.preview)
 
 
-@dataclass
-class SimOutcome:
-    """What one ``darts-sim`` run ended with: its exit code (0 done, 3 unstable), the ``--stats``
-    document and, when unstable, the message saying where it stopped."""
-
-    code: int
-    stats: dict
-    message: str
-    wrote: bool
+#: SimSettings fields -> the darts-sim flag that sets them (an "off" flag for the booleans on by default).
+_SETTING_FLAGS = {"fps": "--fps", "substeps": "--substeps", "iterations": "--iterations", "solver": "--solver",
+                  "device": "--device", "wind": "--wind", "gust": "--gust", "max_speed": "--max-speed", "seed": "--seed",
+                  "ground": "--no-ground", "self_contact": "--no-self-contact", "continuous_collision": "--no-ccd",
+                  "crease_contacts": "--no-crease", "tethers": "--no-tethers"}
 
 
-def _shape(args, dart, body) -> tuple[np.ndarray, np.ndarray]:
-    """(the DART's own betas, the betas to simulate on), checked against the body."""
-    own = np.asarray(dart.body_betas, np.float64)
-    if len(own) > body.num_betas:
-        raise DartsInputError(args.garment, f"was made for {len(own)} shape coefficients, the body has {body.num_betas}")
-    if args.betas is None:
-        return own, own
-    target = np.asarray(args.betas, np.float64)
-    if len(target) > body.num_betas or not np.isfinite(target).all():
-        raise DartsInputError(None, f"--betas must be at most {body.num_betas} finite numbers, got {len(target)}")
-    return own, target
-
-
-def execute(args) -> SimOutcome:
-    """Run ``darts-sim`` for parsed ``args``: check every input and output, simulate, write the
-    output, the stats and the preview. Bad input raises DartsInputError before anything is written."""
-    settings = settings_from_args(args)
-    check_outputs(args)
-    dart = load_dart(resolve_garment(args.garment))
-    if args.material:
-        dart.material_name, dart.material = args.material, dict(MATERIALS[args.material])
-    for text in args.seam:
-        dart.set_seam(*parse_seam_setting(text))
-    motion = load_motion(resolve_motion(args.motion))
-    motion = resample(motion, args.fps) if abs(motion.fps - args.fps) > 1e-9 else motion
-    start, end = _frame_range(args, motion.num_frames)
-    motion = motion.with_frames(trans=motion.trans[start:end],
-                                **{name: arr[start:end] for name, arr in motion.parts().items()})
-    body = load_body(args.body)
-    if args.device != "cpu":
-        _check_device(args.device)
-    own, target = _shape(args, dart, body)
-    track = build_body_track(body, motion, args.fps, args.settle, betas=target, start_betas=own, progress=not args.quiet)
-
-    preview = _PreviewFrames(args, track)
-    try:
-        with _writer(args) as writer:
-            _fill(writer, args, dart, track)
-            def write(garment: np.ndarray, body: np.ndarray) -> None:
-                writer.write_frame({"garment": garment, "body": body})
-                preview(garment, body)
-
-            result = simulate(dart, track, settings, write, progress=not args.quiet, winding=args.stats is not None)
-            if not result.frames:
-                raise _NothingToKeep(result)
-    except _NothingToKeep as nothing:
-        result = nothing.result
-    if args.preview and result.frames:
-        preview.render(args, dart, track)
-    stats = summary(result, settings, len(dart.vertices))
-    if args.stats:
-        with atomic_path(args.stats) as tmp:
-            Path(tmp).write_text(json.dumps(stats, indent=1))
-    return SimOutcome(0 if result.stable else UNSTABLE_EXIT, stats, result.message, bool(result.frames))
+def command_line(job) -> str:
+    """The ``darts-sim`` command that runs ``job`` (for the record: ``darts batch`` runs jobs by the
+    API); settings left at their defaults are left out."""
+    argv = [str(job.garment), str(job.motion), "-o", str(job.output)]
+    defaults = SimSettings()
+    for name, flag in _SETTING_FLAGS.items():
+        value = getattr(job.settings, name)
+        if value == getattr(defaults, name):
+            continue
+        if isinstance(value, bool):
+            argv += [flag]
+        else:
+            argv += [flag, ",".join(f"{v:g}" for v in value) if isinstance(value, tuple) else f"{value}"]
+    options = [("--start", job.start, 0), ("--end", job.end, None), ("--frames", job.frames, None),
+               ("--settle", job.settle, 0.5), ("--body", job.body, None), ("--material", job.material, None),
+               ("--format", job.format, "obj"), ("--stats", job.stats, None), ("--preview", job.preview, None)]
+    argv += [item for flag, value, default in options if value != default for item in (flag, f"{value:g}" if isinstance(value, float) else str(value))]
+    if job.betas:
+        argv += ["--betas", *(f"{b:g}" for b in job.betas)]
+    for setting in job.seams:
+        argv += ["--seam", setting]
+    argv += ["--seam-curves"] if job.seam_curves else []
+    return "darts-sim " + shlex.join(argv)
 
 
 def _main(argv: list[str] | None) -> int:
+    from sim.api import run_job
+
     args = parser().parse_args(argv)
-    outcome = execute(args)
+    run = run_job(job_from_args(args), keep_frames=False, progress=not args.quiet)
     if not args.quiet:
-        _print_summary(outcome.stats, args.output if outcome.wrote else None)
-    if outcome.code == UNSTABLE_EXIT:
-        print(f"darts-sim: {outcome.message}", file=sys.stderr)
-    return outcome.code
-
-
-def _check_device(device: str) -> None:
-    from darts.geometry.warp_runtime import warp
-
-    wp = warp()
-    if device not in [str(d) for d in wp.get_devices()] and not (device == "cuda" and wp.is_cuda_available()):
-        raise DartsInputError(None, f"Warp device '{device}' is not available here (devices: "
-                              f"{', '.join(str(d) for d in wp.get_devices())})")
+        _print_summary(run.stats, args.output if run.stats["frames"] else None)
+    if not run.stable:
+        print(f"darts-sim: {run.message}", file=sys.stderr)
+    return run.exit_code
 
 
 def _print_summary(stats: dict, output: str | None) -> None:

@@ -30,6 +30,7 @@ class RunResult:
     wall_seconds: float = 0.0
     simulated_frames: int = 0
     particles: int = 0
+    settings: SimSettings | None = None  # what the run stepped with (the solver's substeps filled in)
 
 
 def seam_gap_stats(dart: Dart, vertices: np.ndarray) -> dict[str, dict[str, float]]:
@@ -57,7 +58,7 @@ def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
 
     model = cloth_model(dart)
     solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
-    result = RunResult(particles=len(model.rest))
+    result = RunResult(particles=len(model.rest), settings=solver.settings)
     total = len(track.vertices)
     start = time.perf_counter()
     bar = tqdm(total=total - 1, unit="frame", desc="simulating", disable=not progress, leave=False)
@@ -96,9 +97,9 @@ def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
     return result
 
 
-def summary(result: RunResult, settings: SimSettings, vertices: int) -> dict:
+def summary(result: RunResult, vertices: int) -> dict:
     """The ``--stats`` document: run settings, totals and every frame's measurements."""
-    frames = result.frames
+    frames, settings = result.frames, result.settings
     seams = frames[0]["seam_gap"].keys() if frames else []
     return {
         "vertices": vertices, "particles": result.particles, "solver": settings.solver,

@@ -5,8 +5,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.solvers import solver_class, solver_names
-
 DEFAULT_SOLVER = "xpbd"
 #: A particle's path relative to the body longer than this (m) since its last search is traced for
 #: a crossing: half the thickness of the thinnest body part (a finger, about 2 cm), so a shorter path
@@ -20,7 +18,8 @@ class SimSettings:
     """How the solver steps; material-dependent values (thickness, friction) come from the DART."""
 
     fps: float = 30.0
-    substeps: int | None = None  # per frame; None: the solver's own default (``Solver.default_substeps``)
+    # per frame; None: the solver's own default (``Solver.default_substeps``), filled in by ``Simulation``
+    substeps: int | None = None
     iterations: int = 2  # XPBD constraint sweeps per substep
     solver: str = DEFAULT_SOLVER
     device: str = "cpu"
@@ -53,21 +52,16 @@ class SimSettings:
     tethers: bool = True  # XPBD: long-range tethers (sim.tethers) hold stretch over many edges at once
     seed: int = 0
 
-    def __post_init__(self):
-        if self.substeps is None and self.solver in solver_names():
-            self.substeps = solver_class(self.solver).default_substeps
-
     def check(self) -> None:
-        """Raise ValueError naming the first setting out of range."""
-        if self.solver not in solver_names():
-            raise ValueError(f"unknown solver '{self.solver}' (one of {', '.join(solver_names())})")
+        """Raise ValueError naming the first setting out of range (the solver's name is the
+        registry's to check: ``sim.solvers.solver_class``)."""
         finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
                                                self.damping, self.contact_reach, self.self_contact_reach, self.self_contact_list_reach, self.contact_skin, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
         if not finite:
             raise ValueError("settings must be finite numbers")
         rules = [
             (self.fps > 0, f"fps must be > 0, got {self.fps}"),
-            (self.substeps >= 1, f"substeps must be >= 1, got {self.substeps}"),
+            (self.substeps is None or self.substeps >= 1, f"substeps must be >= 1, got {self.substeps}"),
             (self.iterations >= 1, f"iterations must be >= 1, got {self.iterations}"),
             (self.contact_interval >= 1, f"contact interval must be >= 1, got {self.contact_interval}"),
             (self.self_contact_interval >= 1, f"self-contact interval must be >= 1, got {self.self_contact_interval}"),

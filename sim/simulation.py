@@ -16,7 +16,7 @@ from sim import kernels
 from sim.collider import BodyCollider
 from sim.model import ClothModel
 from sim.settings import SimSettings
-from sim.solvers import solver_class
+from sim.solvers import resolved_settings, solver_class
 from sim.state import ClothState
 
 wp = warp()
@@ -43,7 +43,7 @@ class Simulation:
 
     def __init__(self, model: ClothModel, positions: np.ndarray, body_faces: np.ndarray,
                  body_vertices: np.ndarray, settings: SimSettings):
-        settings.check()
+        settings = resolved_settings(settings)
         self.model, self.settings = model, settings
         self.device = device = settings.device
         self.count = len(model.rest)

@@ -108,7 +108,7 @@ def test_a_broken_garment_fails_its_jobs_only(coarse_garments, tmp_path, run_dar
     ("missing", "no such file"),
     ("unknown key", "unknown key(s) frame"),
     ("bad setting", "substeps must be >= 1"),
-    ("unknown material", "invalid choice: 'wool'"),
+    ("unknown material", "unknown material 'wool'"),
     ("address", "cannot reach a Ray cluster at 127.0.0.1:9"),
     ("unknown garment", "sweep.garments: poncho: neither a file nor a shipped garment (shipped: long-pants"),
     ("missing motion file", "jobs[0].motion: "),

@@ -20,7 +20,7 @@ from darts.dart.io import load_dart, save_dart
 from darts.errors import DartsInputError
 from darts.geometry.distance import SurfaceDistance
 from darts.geometry.warp_runtime import warp
-from scenes import resolve_garment
+from darts.shipped import resolve_garment
 
 wp = warp()
 
@@ -150,7 +150,8 @@ def test_local_global_goes_on_from_the_better_of_its_two_starts(body, shipped):
     better, worse = sorted(value, key=value.get)
     assert better == ("snapped" if shipped else "rest")
     assert value[better] < 0.95 * value[worse]
-    assert layer.solve_local_global(points).objective <= 1.001 * value[better]
+    # within 1 % of the better start's end (the worse one is >= 5 % above it); the last digits vary by CPU
+    assert layer.solve_local_global(points).objective <= 1.01 * value[better]
 
 
 def test_a_lengthened_widened_skirt_stays_outside_the_legs(body, coarse_skirt):
@@ -162,7 +163,7 @@ def test_a_lengthened_widened_skirt_stays_outside_the_legs(body, coarse_skirt):
     hull = SurfaceDistance(coarse_skirt.hull_vertices, coarse_skirt.hull_faces)
     assert (hull.query(deformed.vertices)[0] < 0).mean() <= 0.001
     from darts.motion.amass import load_motion
-    from scenes import resolve_motion
+    from darts.shipped import resolve_motion
     from sim.body_track import build_body_track
     from sim.run import simulate
     from sim.settings import SimSettings

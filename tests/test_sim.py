@@ -9,7 +9,8 @@ import pytest
 from darts.dart.io import load_dart
 from darts.geometry.warp_runtime import warp
 from darts.motion.amass import load_motion
-from scenes import GARMENTS_DIR, MOTIONS_DIR, shipped_motions
+from scenes import GARMENTS_DIR, MOTIONS_DIR
+from darts.shipped import shipped_motions
 from sim import kernels
 from sim.body_track import build_body_track
 from sim.model import cloth_model, dihedral_angles

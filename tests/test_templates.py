@@ -265,7 +265,7 @@ def test_templates_fit_other_body_shapes(body, category, betas):
 @pytest.mark.parametrize("category", ["short-sleeve-dress", "long-pants"])
 def test_dataset_resolution_templates_have_no_slivers(body, category):
     """The reconstruction's templates (DATASET_EDGE_LENGTH, 2 cm) are built the same way."""
-    from darts.templates.build import DATASET_EDGE_LENGTH
+    from darts.templates.defaults import DATASET_EDGE_LENGTH
 
     short, lone = short_edges_and_lone_seam_corners(make_dart(category, body, edge_length=DATASET_EDGE_LENGTH))
     assert short == 0 and lone <= 1, (short, lone)

@@ -1,6 +1,7 @@
-"""The SMPL-format body model: ``load_body()`` gives the bundled default or an official file."""
-from darts.body.io import export_smpl_npz, load_body
-from darts.body.model import BodyModel, BodyOutput
-from darts.body.segmentation import PART_NAMES, body_segmentation
+"""The SMPL-format body model: ``read_body()`` gives its arrays (numpy), ``load_body()`` the posable
+``BodyModel`` (torch), of the bundled default or an official file. Names load on first use."""
+from darts.lazy import lazy_exports
 
-__all__ = ["BodyModel", "BodyOutput", "PART_NAMES", "body_segmentation", "export_smpl_npz", "load_body"]
+__getattr__, __all__ = lazy_exports(__name__, {
+    "BodyArrays": "io", "export_smpl_npz": "io", "load_body": "io", "read_body": "io", "BodyModel": "model",
+    "BodyOutput": "model", "PART_NAMES": "segmentation", "body_segmentation": "segmentation"})

@@ -3,19 +3,21 @@ bundled default body) and exporting a body in the official SMPL ``.npz`` layout.
 
 Legacy ``.pkl`` files hold chumpy arrays and scipy sparse matrices; they are read with a restricted
 unpickler that needs no chumpy and refuses any class outside numpy, scipy.sparse and chumpy.
+
+``read_body`` gives the validated arrays (numpy, no torch: ``darts body info`` starts in a fraction
+of a second); ``load_body`` makes them a ``BodyModel`` (torch) for posing and fitting.
 """
 from __future__ import annotations
 
 import json
 import os
 import pickle
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse
-import torch
 
-from darts.body.model import BodyModel
+from darts.body.joints import BodySizes
 from darts.body.segmentation import PART_NAMES
 from darts.errors import DartsInputError
 from darts.fileio import check_input_file, read_npz, require_indices, require_keys, require_real, save_npz
@@ -35,6 +37,34 @@ class _ChumpyStub:
         self.state = state
 
 
+@dataclass
+class BodyArrays(BodySizes):
+    """A validated SMPL-format body as numpy arrays (float64; canonical frame, Y up, metres):
+    v_template [V,3], faces [F,3], shapedirs [V,3,K], posedirs [V,3,9(J-1)] or None (all zero),
+    J_regressor [J,V], weights [V,J], parents [J] (-1 at the root)."""
+
+    name: str
+    v_template: np.ndarray
+    faces: np.ndarray
+    shapedirs: np.ndarray
+    posedirs: np.ndarray | None
+    J_regressor: np.ndarray
+    weights: np.ndarray
+    parents: np.ndarray
+    gender: str = "neutral"
+    metadata: dict = field(default_factory=dict)
+
+    def shaped(self, betas=None) -> tuple[np.ndarray, np.ndarray]:
+        """Rest shape T + S beta [V,3] and its joints J_regressor (T + S beta) [J,3] (canonical frame)."""
+        vertices = self.v_template
+        if betas is not None and len(betas):
+            betas = np.asarray(betas, np.float64)
+            if len(betas) > self.num_betas:
+                raise ValueError(f"{len(betas)} betas given, the model has {self.num_betas}")
+            vertices = vertices + self.shapedirs[:, :, : len(betas)] @ betas
+        return vertices, self.J_regressor @ vertices
+
+
 class _SMPLUnpickler(pickle.Unpickler):
     """Unpickler for legacy SMPL pickles: numpy, scipy.sparse and chumpy stubs only."""
 
@@ -48,6 +78,8 @@ class _SMPLUnpickler(pickle.Unpickler):
         if module.split(".")[0] == "chumpy":
             return type(name, (_ChumpyStub,), {})
         if module.startswith("scipy.sparse") and name.endswith(("_matrix", "_array")):
+            import scipy.sparse
+
             return getattr(scipy.sparse, name)
         if module.startswith("numpy"):
             module = module.replace("numpy.core", "numpy._core")
@@ -74,7 +106,7 @@ def _plain(value, key: str, source) -> np.ndarray:
         value = state["x"]
     else:
         raise DartsInputError(source, f"'{key}' is a chumpy array nested more than {_CHUMPY_DEPTH} deep")
-    if scipy.sparse.issparse(value):
+    if hasattr(value, "toarray"):  # a scipy.sparse matrix (the only class the unpickler lets through with it)
         value = value.toarray()
     if not isinstance(value, np.ndarray | np.generic | int | float | list | tuple):
         raise DartsInputError(source, f"'{key}' must be an array of numbers, found a {type(value).__name__}")
@@ -120,8 +152,8 @@ def _parents_from_kintree(kintree: np.ndarray, num_joints: int, source) -> np.nd
     return parents
 
 
-def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=torch.float32) -> BodyModel:
-    """Validate SMPL-layout arrays and build a BodyModel; every problem names ``source``."""
+def body_arrays(arrays: dict, source, name: str | None = None) -> BodyArrays:
+    """Validate SMPL-layout arrays (a file's keys: v_template, f, shapedirs, ...); every problem names ``source``."""
     require_keys(arrays, REQUIRED_KEYS, source)
     for key in REQUIRED_KEYS + ("posedirs",):
         if key in arrays:
@@ -151,7 +183,6 @@ def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=torch.
             raise DartsInputError(source, f"'posedirs' has shape {posedirs.shape}, expected [{nv}, 3, {9 * (nj - 1)}]")
         if not posedirs.any():
             posedirs = None
-    as_tensor = lambda a: torch.as_tensor(a, dtype=dtype)  # noqa: E731
     metadata = {}
     if "metadata_json" in arrays:
         try:
@@ -160,23 +191,36 @@ def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=torch.
             raise DartsInputError(source, f"'metadata_json' is not JSON ({exc})") from None
         if not isinstance(metadata, dict):
             raise DartsInputError(source, "'metadata_json' must be a JSON object")
-    return BodyModel(
-        name=name or metadata.get("name") or Path(source).stem,
-        v_template=as_tensor(v_template), faces=faces, shapedirs=as_tensor(shapedirs),
-        posedirs=None if posedirs is None else as_tensor(posedirs),
-        J_regressor=as_tensor(regressor), weights=as_tensor(weights), parents=parents,
+    body = BodyArrays(
+        name=name or metadata.get("name") or Path(source).stem, v_template=v_template, faces=faces,
+        shapedirs=shapedirs, posedirs=posedirs, J_regressor=regressor, weights=weights, parents=parents,
         gender=str(metadata.get("gender", "neutral")), metadata=metadata,
     )
-
-
-def load_body(path: str | os.PathLike | None = None, dtype=torch.float32) -> BodyModel:
-    """The body in ``path`` (official SMPL/SMPL-H/SMPL-X .pkl or .npz), or the bundled default."""
-    source = Path(path) if path is not None else DEFAULT_BODY_PATH
-    arrays = _read_arrays(source)
-    model = body_from_arrays(arrays, source, dtype=dtype)
     if "part_labels" in arrays:
-        model.metadata["part_labels"] = _part_labels(arrays["part_labels"], model.num_vertices, source)
-    return model
+        body.metadata["part_labels"] = _part_labels(arrays["part_labels"], nv, source)
+    return body
+
+
+def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=None):
+    """``body_arrays`` as a BodyModel (torch tensors of ``dtype``, default float32)."""
+    from darts.body.model import BodyModel
+
+    return BodyModel.from_arrays(body_arrays(arrays, source, name), dtype)
+
+
+def read_body(path: str | os.PathLike | None = None) -> BodyArrays:
+    """The validated arrays of the body in ``path`` (official SMPL/SMPL-H/SMPL-X .pkl or .npz), or
+    of the bundled default; no torch."""
+    source = Path(path) if path is not None else DEFAULT_BODY_PATH
+    return body_arrays(_read_arrays(source), source)
+
+
+def load_body(path: str | os.PathLike | None = None, dtype=None):
+    """The body in ``path`` (official SMPL/SMPL-H/SMPL-X .pkl or .npz), or the bundled default, as a
+    ``BodyModel`` (torch tensors of ``dtype``, default float32)."""
+    from darts.body.model import BodyModel
+
+    return BodyModel.from_arrays(read_body(path), dtype)
 
 
 def _part_labels(labels, num_vertices: int, source) -> np.ndarray:
@@ -190,23 +234,17 @@ def _part_labels(labels, num_vertices: int, source) -> np.ndarray:
     return labels
 
 
-def export_smpl_npz(model: BodyModel, path: str | os.PathLike, betas=None) -> None:
-    """Write ``model`` in the official SMPL ``.npz`` layout. With ``betas`` the shape is baked into
+def export_smpl_npz(body: BodyArrays, path: str | os.PathLike, betas=None) -> None:
+    """Write ``body`` in the official SMPL ``.npz`` layout. With ``betas`` the shape is baked into
     ``v_template`` (shapedirs are kept, so further betas are relative to that shape)."""
-    v_shaped, _ = model.shaped(betas)
-    num_joints = model.num_joints
-    posedirs = model.posedirs
+    v_shaped, _ = body.shaped(betas)
+    num_joints = body.num_joints
+    posedirs = body.posedirs
     if posedirs is None:
-        posedirs = torch.zeros(model.num_vertices, 3, 9 * (num_joints - 1), dtype=model.dtype)
-    kintree = np.stack([model.parents, np.arange(num_joints)]).astype(np.int64)
+        posedirs = np.zeros((body.num_vertices, 3, 9 * (num_joints - 1)))
+    kintree = np.stack([body.parents, np.arange(num_joints)]).astype(np.int64)
     kintree[0, 0] = -1
     save_npz(
-        path,
-        v_template=v_shaped[0].detach().double().numpy(),
-        shapedirs=model.shapedirs.detach().double().numpy(),
-        posedirs=posedirs.detach().double().numpy(),
-        J_regressor=model.J_regressor.detach().double().numpy(),
-        weights=model.weights.detach().double().numpy(),
-        kintree_table=kintree,
-        f=model.faces.astype(np.uint32),
+        path, v_template=v_shaped, shapedirs=body.shapedirs, posedirs=posedirs, J_regressor=body.J_regressor,
+        weights=body.weights, kintree_table=kintree, f=body.faces.astype(np.uint32),
     )

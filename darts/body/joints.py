@@ -30,3 +30,28 @@ KINDS = {24: ("smpl", SMPL_JOINT_NAMES), 52: ("smplh", SMPLH_JOINT_NAMES), 55: (
 def kind_and_names(num_joints: int) -> tuple[str, list[str]]:
     """The model family and joint names for a joint count; unknown counts get generic names."""
     return KINDS.get(num_joints, ("custom", [f"joint{i}" for i in range(num_joints)]))
+
+
+class BodySizes:
+    """Counts and names of an SMPL-format body that holds ``v_template`` [V,3], ``shapedirs``
+    [V,3,K] and ``parents`` [J] (numpy arrays or torch tensors alike)."""
+
+    @property
+    def num_vertices(self) -> int:
+        return self.v_template.shape[0]
+
+    @property
+    def num_joints(self) -> int:
+        return len(self.parents)
+
+    @property
+    def num_betas(self) -> int:
+        return self.shapedirs.shape[-1]
+
+    @property
+    def kind(self) -> str:
+        return kind_and_names(self.num_joints)[0]
+
+    @property
+    def joint_names(self) -> list[str]:
+        return kind_and_names(self.num_joints)[1]

@@ -11,7 +11,7 @@ import numpy as np
 import torch
 
 from darts.body import lbs
-from darts.body.joints import kind_and_names
+from darts.body.joints import BodySizes
 
 
 @dataclass
@@ -23,7 +23,7 @@ class BodyOutput:
 
 
 @dataclass
-class BodyModel:
+class BodyModel(BodySizes):
     """An SMPL-format body. Tensors: v_template [V,3], shapedirs [V,3,K], posedirs [V,3,9(J-1)] or
     None (all zero), J_regressor [J,V], weights [V,J]; faces [F,3] and parents [J] are numpy."""
 
@@ -39,28 +39,17 @@ class BodyModel:
     metadata: dict = field(default_factory=dict)
 
     @property
-    def num_vertices(self) -> int:
-        return self.v_template.shape[0]
-
-    @property
-    def num_joints(self) -> int:
-        return len(self.parents)
-
-    @property
-    def num_betas(self) -> int:
-        return self.shapedirs.shape[-1]
-
-    @property
-    def kind(self) -> str:
-        return kind_and_names(self.num_joints)[0]
-
-    @property
-    def joint_names(self) -> list[str]:
-        return kind_and_names(self.num_joints)[1]
-
-    @property
     def dtype(self) -> torch.dtype:
         return self.v_template.dtype
+
+    @classmethod
+    def from_arrays(cls, body, dtype: torch.dtype | None = None) -> "BodyModel":
+        """The model of validated ``BodyArrays`` (``darts.body.io``), tensors of ``dtype`` (float32 by default)."""
+        dtype = torch.float32 if dtype is None else dtype
+        as_tensor = lambda a: None if a is None else torch.as_tensor(a, dtype=dtype)  # noqa: E731
+        return cls(body.name, as_tensor(body.v_template), body.faces, as_tensor(body.shapedirs),
+                   as_tensor(body.posedirs), as_tensor(body.J_regressor), as_tensor(body.weights),
+                   body.parents, body.gender, dict(body.metadata))
 
     def to(self, dtype: torch.dtype) -> "BodyModel":
         """A copy whose tensors have ``dtype``."""

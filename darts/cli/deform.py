@@ -3,18 +3,16 @@ from __future__ import annotations
 
 import json
 
-from darts.body.io import load_body
-from darts.crdl.deform import SOLVERS, deform_dart, weld_garment
-from darts.crdl.layer import CrdlWeights
-from darts.crdl.targets import EDITS, edit_targets, parse_edit, read_target_lines
-from darts.dart.io import load_dart, save_dart
+from darts.crdl import SOLVERS
+from darts.crdl.targets import EDITS
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
-from darts.templates.build import DEFAULT_EASE
-from scenes import garment_help, resolve_garment
+from darts.shipped import garment_help
 
 
 def deform(args) -> int:
+    from darts import api
+
     if (args.lines is None) == (not args.edit):
         raise DartsInputError(None, "darts deform needs either --lines LINES.npz or one or more --edit NAME=METRES")
     if (args.mask is None) != (args.camera is None):
@@ -22,25 +20,9 @@ def deform(args) -> int:
     check_output(args.output, (".npz",))
     if args.report:
         check_output(args.report)
-    dart = load_dart(resolve_garment(args.garment))
-    body = load_body(args.body)
-    if body.name != dart.body_model:
-        raise DartsInputError(args.garment, f"was made for the body '{dart.body_model}', not '{body.name}' (pass it with --body)")
-    silhouette = None
-    if args.mask is not None:
-        from darts.crdl.silhouette import Silhouette
-
-        silhouette = Silhouette.from_files(args.mask, args.camera)
-    if args.lines is not None:
-        targets, clearance = read_target_lines(args.lines, dart.category, list(dart.lines)), None
-    else:
-        garment = weld_garment(dart)
-        edits = [parse_edit(text) for text in args.edit]
-        targets, clearance = edit_targets(dart.category, garment.vertices, garment.lines, edits), DEFAULT_EASE
-    weights = CrdlWeights(silhouette=args.silhouette_weight if silhouette is not None else 0.0)
-    options = {"progress": True}
-    deformed, report = deform_dart(dart, body, targets, args.solver, weights, silhouette, clearance=clearance, **options)
-    save_dart(deformed, args.output)
+    deformed, report = api.deform(args.garment, args.lines, args.edit, args.body, args.mask, args.camera, args.solver,
+                                  args.silhouette_weight, progress=True)
+    api.save_garment(deformed, args.output)
     if args.report:
         with atomic_path(args.report) as tmp:
             tmp.write_text(json.dumps(report, indent=1))

@@ -5,18 +5,16 @@ import json
 
 import numpy as np
 
-from darts.body.io import load_body
 from darts.dart.accessories import ACCESSORIES
-from darts.dart.build import make_dart
 from darts.dart.export import MESH_FORMATS, export_mesh, panel_colors
-from darts.dart.io import load_dart, save_dart
+from darts.api import load_garment
 from darts.dart.model import MATERIALS, Dart, parse_seam_setting
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
 from darts.geometry.mesh import loop_length, vertex_normals
-from darts.templates.build import DEFAULT_EDGE_LENGTH
+from darts.templates.defaults import DEFAULT_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
-from scenes import garment_help, resolve_garment
+from darts.shipped import garment_help
 
 
 def template(args) -> int:
@@ -27,11 +25,13 @@ def template(args) -> int:
         raise DartsInputError(None, "darts template needs CATEGORY and -o OUT.npz (or --list)")
     if args.category not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{args.category}' (see 'darts template --list')")
+    from darts import api
+
     check_output(args.output, (".npz",))
-    seams = [parse_seam_setting(text) for text in args.seam]
-    body = load_body(args.body)
-    dart = make_dart(args.category, body, args.betas, args.edge_length, seams, args.accessory, args.material)
-    save_dart(dart, args.output)
+    for text in args.seam:
+        parse_seam_setting(text)  # refused before the body loads
+    dart = api.template(args.category, args.body, args.betas, args.edge_length, args.seam, args.accessory, args.material)
+    api.save_garment(dart, args.output)
     print(f"wrote {args.output}: {args.category}, {len(dart.vertices)} vertices, {len(dart.faces)} faces, "
           f"{len(dart.panel_names)} panels, {len(dart.seams)} seams, {len(dart.pairs)} seam pairs")
     return 0
@@ -103,7 +103,7 @@ def render_png(dart: Dart, path) -> None:
 def inspect(args) -> int:
     if args.png:
         check_output(args.png, (".png",))
-    dart = load_dart(resolve_garment(args.garment))
+    dart = load_garment(args.garment)
     info = summary(dart)
     if args.png:
         render_png(dart, args.png)
@@ -127,7 +127,7 @@ def inspect(args) -> int:
 
 def export(args) -> int:
     check_output(args.output, MESH_FORMATS)
-    dart = load_dart(resolve_garment(args.garment))
+    dart = load_garment(args.garment)
     export_mesh(dart, args.output)
     print(f"wrote {args.output}: {len(dart.vertices)} vertices, {len(dart.panel_names)} panel colours")
     return 0

@@ -21,10 +21,9 @@ import sys
 import time
 
 import numpy as np
-import torch
 
 from darts import __version__
-from darts.body.io import export_smpl_npz, load_body
+from darts.body.io import export_smpl_npz, read_body
 from darts.cli.errors import OneLineParser, run_guarded
 from darts.cli.deform import add_parser as add_deform_parser
 from darts.cli.reconstruct import add_parsers as add_reconstruct_parsers
@@ -33,9 +32,7 @@ from darts.cli.importer import add_parser as add_import_parser
 from darts.errors import DartsInputError
 from darts.fileio import check_output, save_npz
 from darts.motion.amass import load_motion
-from darts.motion.posing import motion_betas, pose_sequence
-from darts.motion.resample import resample
-from scenes import resolve_motion, shipped_motions
+from darts.shipped import motion_help, resolve_motion, shipped_motions
 
 
 def _add_body_args(parser: argparse.ArgumentParser) -> None:
@@ -61,10 +58,9 @@ def _check_betas(model, betas) -> None:
 
 
 def body_info(args) -> int:
-    model = load_body(args.body)
+    model = read_body(args.body)
     _check_betas(model, args.betas)
     vertices, joints = model.shaped(args.betas)
-    vertices, joints = vertices[0].numpy(), joints[0].numpy()
     names = model.joint_names
     info = {
         "name": model.name, "kind": model.kind, "gender": model.gender,
@@ -88,22 +84,23 @@ def body_info(args) -> int:
 
 def body_export(args) -> int:
     check_output(args.output, (".npz",))
-    model = load_body(args.body)
+    model = read_body(args.body)
     _check_betas(model, args.betas)
-    export_smpl_npz(model.to(torch.float64), args.output, betas=args.betas)
+    export_smpl_npz(model, args.output, betas=args.betas)
     print(f"wrote {args.output} ({model.num_vertices} vertices, {model.num_joints} joints)")
     return 0
 
 
 def body_pose(args) -> int:
+    from darts import api
+    from darts.motion.posing import motion_betas
+
     check_output(args.output, (".npz",))
-    model = load_body(args.body)
+    model = api.load_body(args.body)
     _check_betas(model, args.betas)
-    motion = load_motion(resolve_motion(args.motion))
-    if args.fps is not None:
-        motion = resample(motion, args.fps)
+    motion = api.load_motion(args.motion, args.fps)
     started = time.perf_counter()
-    vertices, joints = pose_sequence(model, motion, betas=args.betas, ground=args.ground, progress=True)
+    vertices, joints = api.pose(motion, model, betas=args.betas, ground=args.ground, progress=True)
     if not (np.isfinite(vertices).all() and np.isfinite(joints).all()):
         raise DartsInputError(args.motion, "posing produced NaN or infinite vertices")
     save_npz(args.output, vertices=vertices, joints=joints, faces=model.faces.astype(np.int32),
@@ -170,7 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("-o", "--output", required=True, metavar="OUT.npz")
     export.set_defaults(run=body_export)
     pose = body.add_parser("pose", help="pose the body by an AMASS motion (vertices and joints in Z-up world)")
-    pose.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
+    pose.add_argument("motion", metavar="MOTION", help=motion_help())
     pose.add_argument("-o", "--output", required=True, metavar="OUT.npz")
     pose.add_argument("--fps", type=_positive_fps, help="resample to this frame rate")
     pose.add_argument("--ground", action="store_true", help="shift the sequence so its lowest point touches z = 0")
@@ -179,7 +176,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     motion = groups.add_parser("motion", help="AMASS-format motions").add_subparsers(dest="command", required=True)
     minfo = motion.add_parser("info", help="format, frames, fps, duration, joints")
-    minfo.add_argument("motion", metavar="MOTION", help="AMASS .npz or a shipped motion name")
+    minfo.add_argument("motion", metavar="MOTION", help=motion_help())
     minfo.add_argument("--json", action="store_true", help="print JSON")
     minfo.set_defaults(run=motion_info)
     add_garment_parsers(groups, _add_body_args)

@@ -8,29 +8,15 @@ import sys
 
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
-from darts.templates.build import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH
+from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH
 
 SIM_SUFFIXES = (".usd", ".usda", ".usdc")
 
 
-def _image(path: str):
-    from darts.fileio import read_image
-
-    return read_image(path)
-
-
-def _mask(path: str | None, image):
-    """The garment mask [H,W] bool of ``image`` read from ``path`` (None without one)."""
-    from darts.crdl.silhouette import read_mask
-
-    return None if path is None else read_mask(path, image.shape[1], image.shape[0], "the image")
-
-
 def classify(args) -> int:
-    from darts.regress.pipeline import classify_image
+    from darts import api
 
-    image = _image(args.image)
-    ranked = classify_image(image, _mask(args.mask, image))[: args.top]
+    ranked = api.classify(args.image, args.mask)[: args.top]
     if args.json:
         print(json.dumps([{"category": c, "probability": p} for c, p in ranked], indent=1))
     else:
@@ -40,14 +26,8 @@ def classify(args) -> int:
 
 
 def reconstruct(args) -> int:
-    from darts.body.io import load_body
-    from darts.camera import Camera
-    from darts.dart.io import save_dart
-    from darts.regress.pipeline import reconstruct as run
-    from darts.templates.categories import CATEGORIES
+    from darts import api
 
-    if args.category is not None and args.category not in CATEGORIES:
-        raise DartsInputError(None, f"unknown category '{args.category}' (one of {', '.join(CATEGORIES)})")
     if (args.simulate is None) != (args.sim_out is None):
         raise DartsInputError(None, "--simulate MOTION and --sim-out OUT.usdc go together")
     check_output(args.output, (".npz",))
@@ -55,29 +35,19 @@ def reconstruct(args) -> int:
         check_output(args.report)
     if args.sim_out:
         check_output(args.sim_out, SIM_SUFFIXES)
-    image = _image(args.image)
-    camera = Camera.from_json(args.camera) if args.camera else None
-    if camera is not None and (camera.width, camera.height) != (image.shape[1], image.shape[0]):
-        raise DartsInputError(args.camera, f"is {camera.width}x{camera.height} pixels but the image is "
-                                           f"{image.shape[1]}x{image.shape[0]}")
-    mask = _mask(args.mask, image)
-    body = load_body(args.body)
-    if args.betas is not None and len(args.betas) > body.num_betas:
-        raise DartsInputError(None, f"--betas has {len(args.betas)} values, the body has {body.num_betas}")
-    if not 0.003 <= args.edge_length <= 0.1:
-        raise DartsInputError(None, f"--edge-length must be in [0.003, 0.1] m, got {args.edge_length}")
-    result = run(image, body, args.category, camera, mask, betas=args.betas, edge_length=args.edge_length, progress=True)
-    if mask is None:
+    result = api.reconstruct(args.image, args.category, args.camera, args.mask, args.body, args.betas, args.edge_length,
+                             progress=True)
+    if args.mask is None:
         result.report["note"] = ("no --mask: the CRDL fitted the regressed lines only, without its silhouette term; "
                                  "give the garment's mask (white = garment, the image's size) from any segmenter to use it")
-    save_dart(result.dart, args.output)
+    api.save_garment(result.dart, args.output)
     if args.report:
         with atomic_path(args.report) as tmp:
             tmp.write_text(json.dumps(result.report, indent=1))
     report = result.report
     print(f"{report['category']} ({100 * report['probability']:.1f} %): wrote {args.output}, {report['vertices']} vertices, "
           f"lines fitted to {1e3 * report['crdl']['handle_rmse']:.2f} mm, {100 * report['crdl']['penetration']:.2f} % inside "
-          f"the body, {report['times']['total_s']:.1f} s" + ("" if mask is not None else " (no mask: no silhouette term)"))
+          f"the body, {report['times']['total_s']:.1f} s" + ("" if args.mask is not None else " (no mask: no silhouette term)"))
     if args.simulate:
         command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
         if args.body:

@@ -13,9 +13,8 @@ from darts.crdl.fit import FitSurface
 from darts.crdl.layer import Crdl, CrdlResult, CrdlWeights
 from darts.crdl.targets import correspond
 from darts.dart.model import Dart, welded
+from darts.crdl import SOLVERS
 from darts.errors import DartsInputError
-
-SOLVERS = ("local-global", "adam")
 
 
 @dataclass

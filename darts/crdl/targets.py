@@ -10,12 +10,15 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from darts.errors import DartsInputError
 from darts.templates.categories import CATEGORIES
+
+if TYPE_CHECKING:
+    import torch
 
 #: Edit name -> (what it changes, the lines it applies to). "length" moves a line along its loop's
 #: axis, away from the garment (lengthens for > 0); "width" moves every point away from the loop's
@@ -88,18 +91,23 @@ def read_target_lines(path: str | os.PathLike, category: str, line_names: list[s
     name, each a line of ``category``."""
     from darts.fileio import read_npz
 
-    arrays = read_npz(path)
+    return target_lines(read_npz(path), category, line_names, path)
+
+
+def target_lines(arrays: dict, category: str, line_names: list[str], source=None) -> dict[str, np.ndarray]:
+    """``arrays`` (line name -> [K,3] points, K >= 3, metres, canonical frame) checked as target
+    loops of ``category`` (float64); a DartsInputError naming ``source`` otherwise."""
     if not arrays:
-        raise DartsInputError(path, "holds no lines")
+        raise DartsInputError(source, "holds no lines")
     targets = {}
     for name, value in arrays.items():
         if name not in line_names:
-            raise DartsInputError(path, f"line '{name}' is not a line of a {category} (its lines: {', '.join(line_names)})")
+            raise DartsInputError(source, f"line '{name}' is not a line of a {category} (its lines: {', '.join(line_names)})")
         points = np.asarray(value)
         if points.ndim != 2 or points.shape[1] != 3 or len(points) < 3:
-            raise DartsInputError(path, f"line '{name}' must be [K,3] points with K >= 3, got shape {points.shape}")
+            raise DartsInputError(source, f"line '{name}' must be [K,3] points with K >= 3, got shape {points.shape}")
         if not np.issubdtype(points.dtype, np.number) or not np.isfinite(points).all():
-            raise DartsInputError(path, f"line '{name}' has non-finite or non-numeric values")
+            raise DartsInputError(source, f"line '{name}' has non-finite or non-numeric values")
         targets[name] = points.astype(np.float64)
     return targets
 
@@ -127,8 +135,10 @@ class Correspondence:
     second: np.ndarray
     weight: np.ndarray
 
-    def points(self, target: torch.Tensor) -> torch.Tensor:
+    def points(self, target: "torch.Tensor") -> "torch.Tensor":
         """The matched target points [K,3] (differentiable in ``target`` [M,3])."""
+        import torch
+
         t = torch.as_tensor(self.weight, dtype=target.dtype)[:, None]
         return (1 - t) * target[self.first] + t * target[self.second]
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from darts.dart.model import Dart, Seam
 from darts.errors import DartsInputError
-from darts.templates.build import DEFAULT_EDGE_LENGTH
+from darts.templates.defaults import DEFAULT_EDGE_LENGTH
 
 LIFT = 0.004  # metres between an accessory and the garment under it
 ACCESSORIES = ("collar", "tie")

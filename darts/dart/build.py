@@ -8,7 +8,8 @@ from darts.dart.accessories import add_accessory
 from darts.dart.model import MATERIALS, Dart, Seam
 from darts.dart.panels import split_panels
 from darts.errors import DartsInputError
-from darts.templates.build import DEFAULT_EDGE_LENGTH, Template, build_template
+from darts.templates.build import Template, build_template
+from darts.templates.defaults import DEFAULT_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
 
 

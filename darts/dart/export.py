@@ -5,7 +5,6 @@ import os
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
 from darts.dart.model import Dart
 from darts.errors import DartsInputError
@@ -30,6 +29,8 @@ def export_mesh(dart: Dart, path: str | os.PathLike) -> None:
     colors = panel_colors(len(dart.panel_names))
     vertex_colors = np.full((len(dart.vertices), 4), 255, np.uint8)
     vertex_colors[dart.faces.reshape(-1), :3] = (255 * colors[np.repeat(dart.panel, 3)]).astype(np.uint8)
+    import trimesh
+
     mesh = trimesh.Trimesh(dart.vertices, dart.faces, vertex_colors=vertex_colors, process=False)
     with atomic_path(path) as tmp:
         data = mesh.export(file_type=path.suffix.lower()[1:])

@@ -1,6 +1,6 @@
-"""AMASS-format motions: loading, resampling, posing, and the procedural motions we ship."""
-from darts.motion.amass import Motion, load_motion, save_motion
-from darts.motion.posing import pose_sequence
-from darts.motion.resample import resample
+"""AMASS-format motions: loading, resampling, posing, and the procedural motions we ship. Names load
+on first use (posing needs torch, loading does not)."""
+from darts.lazy import lazy_exports
 
-__all__ = ["Motion", "load_motion", "pose_sequence", "resample", "save_motion"]
+__getattr__, __all__ = lazy_exports(__name__, {
+    "Motion": "amass", "load_motion": "amass", "save_motion": "amass", "pose_sequence": "posing", "resample": "resample"})

@@ -30,7 +30,7 @@ def initial_lines(category: str) -> np.ndarray:
     """F_g of ``category``: [L, LINE_POINTS, 3] (canonical frame, metres)."""
     from darts.dart.io import load_dart
     from darts.geometry.loops import resample_loop
-    from scenes import resolve_garment
+    from darts.shipped import resolve_garment
 
     dart = load_dart(resolve_garment(category))
     vertices = np.asarray(dart.vertices, np.float64)

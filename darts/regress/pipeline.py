@@ -25,7 +25,7 @@ import torch
 from darts.camera import IMAGE_SIZE, Camera
 from darts.errors import DartsInputError
 from darts.regress.data import CATEGORY_IDS, camera_batch, initial_lines, padded
-from darts.templates.build import DATASET_EDGE_LENGTH
+from darts.templates.defaults import DATASET_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
 
 WEIGHTS = Path(__file__).parent / "weights"

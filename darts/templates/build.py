@@ -21,15 +21,10 @@ from darts.geometry.mesh import boundary_loops, directed_edges, vertex_normals
 from darts.geometry.remesh import remesh
 from darts.geometry.slivers import remove_slivers
 from darts.templates.categories import CATEGORIES, SIDES, Category, seam_fields
+from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH
 from darts.templates.landmarks import (Landmarks, above_field, arm_field, below_field, landmarks,
                                        neckline_field)
 
-DEFAULT_EDGE_LENGTH = 0.011  # metres: a short-sleeve top gets about 6k vertices on the default body
-#: metres: the templates of the reconstruction dataset and of ``darts reconstruct`` (2-4k vertices;
-#: a 224 px picture resolves about 7 mm, and the CRDL's silhouette term costs about 1 s an
-#: iteration here, several times that at DEFAULT_EDGE_LENGTH)
-DATASET_EDGE_LENGTH = 0.02
-DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal
 #: edges shorter than this fraction of the median edge are collapsed (seam insertion leaves them)
 MIN_EDGE_FRACTION = 1 / 3
 

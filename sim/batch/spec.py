@@ -1,14 +1,15 @@
 """A batch SPEC (TOML or JSON, ``docs/batch.md``): garments x motions x body shapes x materials x seam
-settings, each combination one ``darts-sim`` run, plus explicit jobs.
+settings, each combination one simulation (a ``sim.api.SimJob``, what one ``darts-sim`` run does),
+plus explicit jobs.
 
-    [sim]      darts-sim settings for every job (frames, settle, fps, solver, format, ...)
+    [sim]      simulation settings for every job (frames, settle, fps, solver, format, ...)
     [sweep]    garments, motions, bodies (name, betas and/or file), materials, seams: the cross product
     [[jobs]]   explicit jobs (garment, motion, body, material, seams, and sim settings of their own)
 
 Relative paths are relative to the SPEC's folder; names of shipped garments and motions stay names.
 Everything is checked here, once, before any job runs: the keys, their types, that every garment
-and motion names a file or a shipped one, and each job's darts-sim command line (parsed and its
-settings range-checked by darts-sim itself). Whether a garment or motion file can be read is each
+and motion names a file or a shipped one, and each job's settings (range-checked by ``SimJob.check``,
+as for darts-sim). Whether a garment or motion file can be read is each
 job's own business: a broken file fails that job only.
 """
 from __future__ import annotations
@@ -17,7 +18,6 @@ import hashlib
 import itertools
 import json
 import os
-import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,15 +25,17 @@ from darts.errors import DartsInputError
 from darts.fileio import read_input
 from darts.jobs import Job, safe_id
 
-#: SPEC sim keys -> (darts-sim flag, kind). A bool "off" key passes its flag when false.
+#: SPEC sim keys -> (what they set: "settings" a SimSettings field, "job" a SimJob field, None the
+#: outputs; the field's name; the kind of value). A SPEC's bools set the field as they are.
 SIM_KEYS = {
-    "fps": ("--fps", float), "frames": ("--frames", int), "start": ("--start", int), "end": ("--end", int),
-    "settle": ("--settle", float), "solver": ("--solver", str), "substeps": ("--substeps", int),
-    "iterations": ("--iterations", int), "device": ("--device", str), "wind": ("--wind", "vector"),
-    "gust": ("--gust", float), "max_speed": ("--max-speed", float), "seed": ("--seed", int),
-    "ground": ("--no-ground", "off"), "self_contact": ("--no-self-contact", "off"), "ccd": ("--no-ccd", "off"),
-    "crease": ("--no-crease", "off"), "seam_curves": ("--seam-curves", "on"), "format": (None, str),
-    "preview": (None, str),
+    "fps": ("settings", "fps", float), "frames": ("job", "frames", int), "start": ("job", "start", int),
+    "end": ("job", "end", int), "settle": ("job", "settle", float), "solver": ("settings", "solver", str),
+    "substeps": ("settings", "substeps", int), "iterations": ("settings", "iterations", int),
+    "device": ("settings", "device", str), "wind": ("settings", "wind", "vector"), "gust": ("settings", "gust", float),
+    "max_speed": ("settings", "max_speed", float), "seed": ("settings", "seed", int),
+    "ground": ("settings", "ground", bool), "self_contact": ("settings", "self_contact", bool),
+    "ccd": ("settings", "continuous_collision", bool), "crease": ("settings", "crease_contacts", bool),
+    "seam_curves": ("job", "seam_curves", bool), "format": (None, "format", str), "preview": (None, "preview", str),
 }
 FORMATS = ("usd", "usda", "usdc", "obj", "ply")
 PREVIEWS = ("gif", "png", "mp4")
@@ -116,7 +118,7 @@ class _Checker:
         if "/" in text or text.endswith(".npz") or text.endswith(".pkl"):
             text = str((self.folder / text).resolve()) if not os.path.isabs(text) else text
         if kind is not None:
-            from scenes import resolve_garment, resolve_motion
+            from darts.shipped import resolve_garment, resolve_motion
 
             try:
                 (resolve_garment if kind == "garment" else resolve_motion)(text)
@@ -151,8 +153,8 @@ class _Checker:
     def sim(self, value, where: str) -> dict:
         value = self.table(value, where, SIM_KEYS)
         for key, item in value.items():
-            kind = SIM_KEYS[key][1]
-            if kind in ("off", "on"):
+            kind = SIM_KEYS[key][2]
+            if kind is bool:
                 if not isinstance(item, bool):
                     self.fail(f"{where}.{key}", f"must be true or false, got {item!r}")
             elif kind == "vector":
@@ -173,36 +175,26 @@ class _Checker:
         return value
 
 
-def sim_argv(garment: str, motion: str, body: Body, material: str | None, seams: SeamSet, sim: dict) -> list[str]:
-    """The darts-sim command line of one job; outputs go into JOB_FOLDER."""
+def sim_job(garment: str, motion: str, body: Body, material: str | None, seams: SeamSet, sim: dict):
+    """The ``SimJob`` of one SPEC job, its outputs in JOB_FOLDER (``stats.json`` always; ``sim.usdc``
+    or the format's; ``preview.<kind>`` when asked)."""
+    from sim.api import SimJob
+    from sim.settings import SimSettings
+
     form = sim.get("format", "usdc")
-    output = f"{JOB_FOLDER}/sim.{form}" if form.startswith("usd") else f"{JOB_FOLDER}/frames"
-    argv = [garment, motion, "-o", output, "--stats", f"{JOB_FOLDER}/stats.json", "--quiet"]
-    if form in ("obj", "ply"):
-        argv += ["--format", form]
-    if "preview" in sim:
-        argv += ["--preview", f"{JOB_FOLDER}/preview.{sim['preview']}"]
+    settings, options = {}, {}
     for key, value in sim.items():
-        flag, kind = SIM_KEYS[key]
-        if flag is None:
-            continue
-        if kind == "off":
-            argv += [] if value else [flag]
-        elif kind == "on":
-            argv += [flag] if value else []
-        elif kind == "vector":
-            argv += [flag, ",".join(f"{float(v):g}" for v in value)]
-        else:
-            argv += [flag, str(value)]
-    if body.file is not None:
-        argv += ["--body", body.file]
-    if body.betas:
-        argv += ["--betas", *(f"{b:g}" for b in body.betas)]
-    if material is not None:
-        argv += ["--material", material]
-    for setting in seams.settings:
-        argv += ["--seam", setting]
-    return argv
+        where, name, kind = SIM_KEYS[key]
+        value = tuple(float(v) for v in value) if kind == "vector" else value
+        if where == "settings":
+            settings[name] = value
+        elif where == "job":
+            options[name] = value
+    return SimJob(garment, motion, SimSettings(**settings), body=body.file, betas=list(body.betas) if body.betas else None,
+                  material=material, seams=seams.settings,
+                  output=f"{JOB_FOLDER}/sim.{form}" if form.startswith("usd") else f"{JOB_FOLDER}/frames",
+                  format=form if form in ("obj", "ply") else "obj", stats=f"{JOB_FOLDER}/stats.json",
+                  preview=f"{JOB_FOLDER}/preview.{sim['preview']}" if "preview" in sim else None, **options)
 
 
 def _stem(name: str) -> str:
@@ -211,20 +203,22 @@ def _stem(name: str) -> str:
 
 def _job(garment: str, motion: str, body: Body, material: str | None, seams: SeamSet, sim: dict, checker: _Checker,
          where: str) -> Job:
-    from sim.cli import parser, settings_from_args
+    from dataclasses import replace
 
-    argv = sim_argv(garment, motion, body, material, seams, sim)
-    try:
-        settings_from_args(parser().parse_args(argv))
+    from sim.cli import command_line
+
+    job = sim_job(garment, motion, body, material, seams, sim)
+    try:  # the settings and values only: the outputs are the job folder's, checked when it runs
+        replace(job, output=None, stats=None, preview=None).check()
     except DartsInputError as exc:
         checker.fail(where, exc.problem)
-    digest = hashlib.sha1(json.dumps(argv).encode()).hexdigest()[:6]
+    request = job.to_dict()
+    digest = hashlib.sha1(json.dumps(request, sort_keys=True).encode()).hexdigest()[:6]
     parts = [_stem(garment), _stem(motion), body.name] + ([material] if material else []) + (
         [seams.name] if seams.settings else [])
     inputs = {"garment": garment, "motion": motion, "body": body.name, "betas": list(body.betas or ()),
               "body_file": body.file, "material": material or "own", "seams": seams.name,
-              "seam_settings": list(seams.settings), "sim": sim, "argv": argv,
-              "command": "darts-sim " + shlex.join(argv)}
+              "seam_settings": list(seams.settings), "sim": sim, "job": request, "command": command_line(job)}
     return Job(safe_id("_".join(parts + [digest])), inputs)
 
 

@@ -66,7 +66,7 @@ def make_garment(job: Job, folder: Path) -> dict:
     from darts.dart.build import make_dart
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
-    from darts.templates.build import DATASET_EDGE_LENGTH, DEFAULT_EASE
+    from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
     from darts.templates.categories import CATEGORIES
     from sim.dataset.drape import drape
 

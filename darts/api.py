@@ -1,0 +1,193 @@
+"""The library entry points of ``darts`` (``docs/api.md``): bodies, motions and garments loaded by
+path or shipped name, templates built, garments deformed and reconstructed, as the commands do.
+
+Every function takes a path, a shipped name or the object itself, validates it once (a
+``DartsInputError`` naming the file and the problem), and returns plain objects and numpy arrays:
+``BodyModel``, ``Motion``, ``Dart``. Frames: garments and bodies at rest are in the canonical frame
+(Y up); posed bodies are in the AMASS world frame (Z up); metres throughout. Simulation is
+``sim.simulate`` (``darts`` itself never imports the simulator).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from darts.errors import DartsInputError
+from darts.shipped import resolve_garment, resolve_motion
+from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH
+
+PathLike = str | os.PathLike
+
+
+def load_body(body=None):
+    """The SMPL-format ``BodyModel`` in the file ``body`` (official SMPL/SMPL-H/SMPL-X .pkl/.npz),
+    the bundled default body when None, or ``body`` itself when it is one."""
+    from darts.body.io import load_body as load
+    from darts.body.model import BodyModel
+
+    return body if isinstance(body, BodyModel) else load(body)
+
+
+def load_motion(motion, fps: float | None = None):
+    """The AMASS-format ``Motion`` of a ``.npz`` path or a shipped name (``walk``, ``squat`` ...),
+    resampled to ``fps`` when given."""
+    from darts.motion.amass import Motion
+    from darts.motion.amass import load_motion as load
+    from darts.motion.resample import resample
+
+    motion = motion if isinstance(motion, Motion) else load(resolve_motion(motion))
+    if fps is not None and abs(motion.fps - fps) > 1e-9:
+        motion = resample(motion, fps)
+    return motion
+
+
+def load_garment(garment):
+    """The ``Dart`` in a ``garment.npz`` path or of a shipped name (``short-sleeve-top`` ...)."""
+    from darts.dart.io import load_dart
+    from darts.dart.model import Dart
+
+    return garment if isinstance(garment, Dart) else load_dart(resolve_garment(garment))
+
+
+def save_garment(garment, path: PathLike) -> Path:
+    """Write ``garment`` (a ``Dart``) to ``path`` (``.npz``; checked, written atomically)."""
+    from darts.dart.io import save_dart
+    from darts.fileio import check_output
+
+    path = check_output(path, (".npz",))
+    save_dart(garment, path)
+    return path
+
+
+def pose(motion, body=None, betas: Sequence[float] | None = None, ground: bool = False,
+         progress: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The body posed by ``motion``: vertices [F,V,3] and joints [F,J,3] (float32, world frame, Z
+    up, metres); ``betas`` the shape (default: the motion's own, else the mean shape); ``ground``
+    shifts the sequence so that its lowest point touches z = 0."""
+    from darts.motion.posing import pose_sequence
+
+    return pose_sequence(load_body(body), load_motion(motion), betas=betas, ground=ground, progress=progress)
+
+
+def template(category: str, body=None, betas: Sequence[float] | None = None, edge_length: float = DEFAULT_EDGE_LENGTH,
+             seams: Sequence[str] = (), accessories: Sequence[str] = (), material: str = "cotton"):
+    """The DART of ``category`` (``darts.templates.categories.CATEGORIES``) cut from the body shaped
+    by ``betas``: target edge length in metres, seam settings ``NAME=REGIME[:STIFFNESS]`` (NAME
+    ``all`` for every seam), accessories (``collar``, ``tie``) and a material name."""
+    from darts.dart.build import make_dart
+    from darts.dart.model import parse_seam_setting
+    from darts.templates.categories import CATEGORIES
+
+    if category not in CATEGORIES:
+        raise DartsInputError(None, f"unknown category '{category}' (one of {', '.join(CATEGORIES)})")
+    settings = [parse_seam_setting(text) for text in seams]
+    return make_dart(category, load_body(body), betas, edge_length, settings, list(accessories), material)
+
+
+def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None, camera=None,
+           solver: str = "local-global", silhouette_weight: float = 1.0, progress: bool = False):
+    """``garment`` deformed by the CRDL so that its feature lines reach targets: ``lines`` (a
+    ``lines.npz`` path, or a dict of line name -> [K,3] loop, canonical frame, metres) or ``edits``
+    (``NAME=METRES``: ``hem=0.1`` lengthens the hem 10 cm; names in ``darts.crdl.targets.EDITS``).
+    With ``mask`` (a path or [H,W] bool) and ``camera`` (a ``Camera`` or a camera.json) the
+    silhouette term joins. Returns (the deformed ``Dart``, its report: arap_energy, handle_rmse (m),
+    penetration (fraction of vertices inside the body), iterations, wall_seconds)."""
+    from darts.camera import Camera
+    from darts.crdl import SOLVERS
+    from darts.crdl.deform import deform_dart, weld_garment
+    from darts.crdl.layer import CrdlWeights
+    from darts.crdl.silhouette import Silhouette, read_mask
+    from darts.crdl.targets import edit_targets, parse_edit, read_target_lines, target_lines
+    from darts.templates.defaults import DEFAULT_EASE
+
+    if (lines is None) == (not edits):
+        raise DartsInputError(None, "deform needs either target lines or one or more edits NAME=METRES")
+    if (mask is None) != (camera is None):
+        raise DartsInputError(None, "a mask and its camera go together")
+    if solver not in SOLVERS:
+        raise DartsInputError(None, f"unknown CRDL solver '{solver}' (one of {', '.join(SOLVERS)})")
+    dart = load_garment(garment)
+    model = load_body(body)
+    if model.name != dart.body_model:
+        raise DartsInputError(garment if isinstance(garment, (str, os.PathLike)) else None,
+                              f"was made for the body '{dart.body_model}', not '{model.name}' (pass that body)")
+    silhouette = None
+    if mask is not None:
+        camera = camera if isinstance(camera, Camera) else Camera.from_json(camera)
+        if not isinstance(mask, np.ndarray):
+            mask = read_mask(mask, camera.width, camera.height)
+        silhouette = Silhouette(np.asarray(mask, bool), camera)
+    if lines is not None:
+        names = list(dart.lines)
+        targets = (target_lines(lines, dart.category, names) if isinstance(lines, dict)
+                   else read_target_lines(lines, dart.category, names))
+        clearance = None
+    else:
+        welded = weld_garment(dart)
+        targets = edit_targets(dart.category, welded.vertices, welded.lines, [parse_edit(text) for text in edits])
+        clearance = DEFAULT_EASE
+    weights = CrdlWeights(silhouette=silhouette_weight if silhouette is not None else 0.0)
+    return deform_dart(dart, model, targets, solver, weights, silhouette, clearance=clearance, progress=progress)
+
+
+def read_picture(image):
+    """An RGB picture [H,W,3] uint8 from a path (PNG/JPEG; refused when not an image or too large)
+    or an array."""
+    from darts.fileio import read_image
+
+    if isinstance(image, np.ndarray):
+        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+            raise DartsInputError(None, f"an image array must be [H,W,3] uint8, got {image.shape} {image.dtype}")
+        return image
+    return read_image(image)
+
+
+def classify(image, mask=None) -> list[tuple[str, float]]:
+    """The garment categories of ``image`` (a path or [H,W,3] uint8) with their probabilities, most
+    likely first; ``mask`` (a path or [H,W] bool) shows the classifier the garment alone."""
+    from darts.regress.pipeline import classify_image
+
+    picture = read_picture(image)
+    return classify_image(picture, _picture_mask(mask, picture))
+
+
+def _picture_mask(mask, picture: np.ndarray):
+    from darts.crdl.silhouette import read_mask
+
+    if mask is None or isinstance(mask, np.ndarray):
+        if mask is not None and mask.shape != picture.shape[:2]:
+            raise DartsInputError(None, f"the mask is {mask.shape[1]}x{mask.shape[0]}, the image {picture.shape[1]}x{picture.shape[0]}")
+        return None if mask is None else np.asarray(mask, bool)
+    return read_mask(mask, picture.shape[1], picture.shape[0], "the image")
+
+
+def reconstruct(image, category: str | None = None, camera=None, mask=None, body=None,
+                betas: Sequence[float] | None = None, edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False):
+    """The DART of the garment in ``image`` (a path or [H,W,3] uint8): classifier (unless
+    ``category``), feature-line regressor, CRDL (with the silhouette term when ``mask`` is given).
+    ``camera``: a ``Camera`` or camera.json (default: the dataset's camera of the category). Returns
+    a ``Reconstruction``: ``.dart`` and ``.report`` (category, probabilities, lines, CRDL numbers,
+    seconds per stage)."""
+    from darts.camera import Camera
+    from darts.regress.pipeline import reconstruct as run
+    from darts.templates.categories import CATEGORIES
+
+    if category is not None and category not in CATEGORIES:
+        raise DartsInputError(None, f"unknown category '{category}' (one of {', '.join(CATEGORIES)})")
+    if not 0.003 <= edge_length <= 0.1:
+        raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
+    picture = read_picture(image)
+    source = None if camera is None or isinstance(camera, Camera) else camera
+    if source is not None:
+        camera = Camera.from_json(source)
+    if camera is not None and (camera.width, camera.height) != (picture.shape[1], picture.shape[0]):
+        raise DartsInputError(source, f"is {camera.width}x{camera.height} pixels but the image is "
+                                      f"{picture.shape[1]}x{picture.shape[0]}")
+    model = load_body(body)
+    if betas is not None and len(betas) > model.num_betas:
+        raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
+    return run(picture, model, category, camera, _picture_mask(mask, picture), betas=betas, edge_length=edge_length,
+               progress=progress)

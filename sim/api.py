@@ -1,0 +1,298 @@
+"""The library entry point of the simulator: ``sim.simulate(garment, motion, ...)`` drapes a DART on
+the body and simulates it through a motion, returning the frames as arrays and the measures; the
+``darts-sim`` command and ``darts batch`` run the same ``SimJob`` through ``run_job``.
+
+Frames are in the AMASS world frame (Z up, metres); the first recorded frame is the motion's frame
+``start`` after ``settle`` seconds in which the body blends from its rest pose (and from the DART's
+body shape into ``betas``) into it. Bad input raises ``DartsInputError`` before anything is written.
+"""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from darts.errors import DartsInputError
+from darts.fileio import atomic_path, check_output
+from darts.shipped import resolve_garment, resolve_motion
+from exporters.sequence import SEQUENCE_FORMATS
+from exporters.usd import USD_SUFFIXES
+from sim.settings import SimSettings
+from sim.solvers import resolved_settings
+
+#: Exit code of an unstable run (its frames before the blow-up are kept).
+UNSTABLE_EXIT = 3
+
+
+@dataclass
+class SimJob:
+    """One simulation: the garment (a DART, a ``garment.npz`` or a shipped name) on the body posed by
+    ``motion`` (a ``Motion``, an AMASS ``.npz`` or a shipped name), and where its results go.
+
+    ``start``/``end``/``frames`` count motion frames at ``settings.fps``; ``body`` is an SMPL-format
+    file (default: the bundled body); ``betas`` the shape simulated on (default: the DART's own);
+    ``material`` replaces the garment's; ``seams`` are ``NAME=REGIME[:STIFFNESS]`` settings.
+    ``output``: a USD file (.usd/.usda/.usdc) or a folder of OBJ/PLY frames (``format``); ``stats``:
+    a JSON of every frame's measures; ``preview``: a .gif/.mp4/.png picture of the run."""
+
+    garment: object
+    motion: object
+    settings: SimSettings = field(default_factory=SimSettings)
+    start: int = 0
+    end: int | None = None
+    frames: int | None = None
+    settle: float = 0.5
+    body: str | None = None
+    betas: Sequence[float] | None = None
+    material: str | None = None
+    seams: Sequence[str] = ()
+    output: str | None = None
+    format: str = "obj"
+    seam_curves: bool = False
+    stats: str | None = None
+    preview: str | None = None
+
+    def check(self) -> SimSettings:
+        """The settings resolved (``sim.solvers.resolved_settings``) after every value of the job is
+        checked; DartsInputError naming the first bad one, and every output checked writable."""
+        try:
+            settings = resolved_settings(self.settings)
+        except ValueError as exc:
+            raise DartsInputError(None, str(exc)) from None
+        if not (np.isfinite(self.settle) and self.settle >= 0):
+            raise DartsInputError(None, f"settle must be >= 0 seconds, got {self.settle}")
+        if self.frames is not None and self.frames < 1:
+            raise DartsInputError(None, f"frames must be >= 1, got {self.frames}")
+        from darts.dart.model import MATERIALS, parse_seam_setting
+
+        if self.material is not None and self.material not in MATERIALS:
+            raise DartsInputError(None, f"unknown material '{self.material}' (one of {', '.join(sorted(MATERIALS))})")
+        for text in self.seams:
+            parse_seam_setting(text)
+        if self.format not in SEQUENCE_FORMATS:
+            raise DartsInputError(None, f"format must be one of {', '.join(SEQUENCE_FORMATS)}, got {self.format!r}")
+        self._check_outputs()
+        return settings
+
+    def _check_outputs(self) -> None:
+        if self.output is not None:
+            out = Path(self.output)
+            if out.suffix and out.suffix.lower() not in USD_SUFFIXES:
+                raise DartsInputError(out, f"output must end in {', '.join(USD_SUFFIXES)} or be a directory (no suffix)")
+            check_output(out, directory=not out.suffix)
+        if self.stats is not None:
+            check_output(self.stats)
+        if self.preview is not None:
+            from darts.preview import check_preview
+
+            check_preview(self.preview)
+
+    def to_dict(self) -> dict:
+        """The job as JSON-able values (garment and motion given as names or paths)."""
+        values = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "settings"}
+        values["betas"] = None if self.betas is None else [float(b) for b in self.betas]
+        values["seams"] = list(self.seams)
+        return {**{k: str(v) if isinstance(v, os.PathLike) else v for k, v in values.items()},
+                "settings": asdict(self.settings)}
+
+    @classmethod
+    def from_dict(cls, values: dict) -> "SimJob":
+        """The inverse of ``to_dict``."""
+        values = dict(values)
+        settings = dict(values.pop("settings", {}))
+        for key in ("gravity", "wind"):
+            if key in settings:
+                settings[key] = tuple(settings[key])
+        values["seams"] = tuple(values.get("seams", ()))
+        return cls(settings=SimSettings(**settings), **values)
+
+
+@dataclass
+class Simulated:
+    """A finished run. ``garment`` [F,V,3] and ``body`` [F,B,3] are the recorded frames (world frame,
+    Z up, metres; None unless kept), ``garment_faces`` and ``body_faces`` their triangles, ``stats``
+    the ``--stats`` document (settings, totals, per-frame strain, penetration, seam gaps ...);
+    ``stable`` False: the run stopped at ``message`` and the frames before it are what it kept."""
+
+    garment: np.ndarray | None
+    body: np.ndarray | None
+    garment_faces: np.ndarray
+    body_faces: np.ndarray
+    fps: float
+    stats: dict
+    stable: bool
+    message: str
+
+    @property
+    def exit_code(self) -> int:
+        return 0 if self.stable else UNSTABLE_EXIT
+
+
+def simulate(garment, motion, settings: SimSettings | None = None, *, keep_frames: bool = True,
+             progress: bool = False, **options) -> Simulated:
+    """Simulate ``garment`` on the body posed by ``motion`` (see ``SimJob`` for ``options``: start,
+    end, frames, settle, body, betas, material, seams, output, format, stats, preview ...).
+
+    >>> run = simulate("short-sleeve-top", "walk", frames=10)
+    >>> run.garment.shape  # (10, vertices, 3), metres, Z up
+    """
+    job = SimJob(garment, motion, settings if settings is not None else SimSettings(), **options)
+    return run_job(job, keep_frames=keep_frames, progress=progress)
+
+
+def _frame_range(job: SimJob, count: int) -> tuple[int, int]:
+    end = job.end if job.end is not None else count
+    if job.frames is not None:
+        end = min(count, job.start + job.frames)
+    if not 0 <= job.start < end <= count:
+        raise DartsInputError(None, f"frame range [{job.start}, {end}) is empty or outside the motion's {count} frames "
+                                    f"at {job.settings.fps:g} fps")
+    return job.start, end
+
+
+def _load_dart(job: SimJob):
+    from darts.dart.io import load_dart
+    from darts.dart.model import MATERIALS, Dart, parse_seam_setting
+
+    # A shallow copy is enough: material and seams are replaced below, never changed in place.
+    dart = replace(job.garment) if isinstance(job.garment, Dart) else load_dart(resolve_garment(job.garment))
+    if job.material is not None:
+        dart.material_name, dart.material = job.material, dict(MATERIALS[job.material])
+    for text in job.seams:
+        dart.set_seam(*parse_seam_setting(text))
+    return dart
+
+
+def _load_motion(job: SimJob):
+    from darts.motion.amass import Motion, load_motion
+    from darts.motion.resample import resample
+
+    motion = job.motion if isinstance(job.motion, Motion) else load_motion(resolve_motion(job.motion))
+    fps = job.settings.fps
+    motion = resample(motion, fps) if abs(motion.fps - fps) > 1e-9 else motion
+    start, end = _frame_range(job, motion.num_frames)
+    return motion.with_frames(trans=motion.trans[start:end], **{name: arr[start:end] for name, arr in motion.parts().items()})
+
+
+def _shape(job: SimJob, dart, body) -> tuple[np.ndarray, np.ndarray]:
+    """(the DART's own betas, the betas to simulate on), checked against the body."""
+    own = np.asarray(dart.body_betas, np.float64)
+    if len(own) > body.num_betas:
+        raise DartsInputError(job.garment if isinstance(job.garment, (str, Path)) else None,
+                              f"was made for {len(own)} shape coefficients, the body has {body.num_betas}")
+    if job.betas is None:
+        return own, own
+    target = np.asarray(job.betas, np.float64)
+    if len(target) > body.num_betas or not np.isfinite(target).all():
+        raise DartsInputError(None, f"betas must be at most {body.num_betas} finite numbers, got {len(target)}")
+    return own, target
+
+
+def _check_device(device: str) -> None:
+    from darts.geometry.warp_runtime import warp
+
+    wp = warp()
+    if device not in [str(d) for d in wp.get_devices()] and not (device == "cuda" and wp.is_cuda_available()):
+        raise DartsInputError(None, f"Warp device '{device}' is not available here (devices: "
+                              f"{', '.join(str(d) for d in wp.get_devices())})")
+
+
+class _Frames:
+    """What the run's consumers get of every recorded frame: the writer, the frames a preview draws,
+    and (``keep``) every frame for the caller (float32)."""
+
+    def __init__(self, job: SimJob, track, keep: bool):
+        from darts.preview import frames_to_draw
+
+        total = len(track.vertices) - track.settle_frames
+        self.drawn = set(frames_to_draw(total, job.preview).tolist()) if job.preview else set()
+        self.keep, self.writer = keep, None
+        self.seen, self.numbers, self.garment, self.body = 0, [], [], []
+
+    def __call__(self, garment: np.ndarray, body: np.ndarray) -> None:
+        if self.writer is not None:
+            self.writer.write_frame({"garment": garment, "body": body})
+        if self.keep or self.seen in self.drawn:
+            self.numbers.append(self.seen)
+            self.garment.append(garment.astype(np.float32))
+            self.body.append(body.astype(np.float32))
+        self.seen += 1
+
+    def render_preview(self, job: SimJob, dart, track, progress: bool) -> None:
+        from darts.dart.export import panel_colors
+        from darts.preview import Animation, render_preview
+
+        drawn = [i for i, n in enumerate(self.numbers) if n in self.drawn]
+        animation = Animation(faces={"body": np.asarray(track.faces), "garment": dart.faces},
+                              colors={"body": np.full((len(track.faces), 3), 0.8),
+                                      "garment": panel_colors(len(dart.panel_names))[dart.panel]},
+                              frames={"garment": np.stack([self.garment[i] for i in drawn]),
+                                      "body": np.stack([self.body[i] for i in drawn])},
+                              fps=job.settings.fps, numbers=np.array([self.numbers[i] for i in drawn]), total=self.seen)
+        render_preview(animation, job.preview, progress=progress)
+
+
+def _writer(job: SimJob, dart, track):
+    """The output writer with the body (grey) and the garment (coloured by panel) declared."""
+    from darts.dart.export import panel_colors
+    from exporters.sequence import MeshSequenceWriter
+    from exporters.usd import UsdAnimationWriter
+
+    out = Path(job.output)
+    writer = UsdAnimationWriter(out, job.settings.fps) if out.suffix else MeshSequenceWriter(out, job.settings.fps, job.format)
+    writer.add_mesh("body", track.faces, track.vertices.shape[1], np.full((len(track.faces), 3), 0.8))
+    writer.add_mesh("garment", dart.faces, len(dart.vertices), panel_colors(len(dart.panel_names))[dart.panel])
+    if job.seam_curves and len(dart.pairs):
+        writer.add_curves("garment", dart.pairs)
+    return writer
+
+
+class _NothingToKeep(Exception):
+    """The run went unstable before its first recorded frame: no output is written."""
+
+    def __init__(self, result):
+        super().__init__(result.message)
+        self.result = result
+
+
+def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Simulated:
+    """Check every input and output of ``job``, simulate, write its output, stats and preview."""
+    from contextlib import nullcontext
+
+    from darts.body.io import load_body
+    from sim.body_track import build_body_track
+    from sim.run import simulate as run_frames
+    from sim.run import summary
+
+    settings = job.check()
+    dart = _load_dart(job)
+    motion = _load_motion(job)
+    body = load_body(job.body)
+    if settings.device != "cpu":
+        _check_device(settings.device)
+    own, target = _shape(job, dart, body)
+    track = build_body_track(body, motion, settings.fps, job.settle, betas=target, start_betas=own, progress=progress)
+
+    frames = _Frames(job, track, keep_frames)
+    try:
+        with (_writer(job, dart, track) if job.output is not None else nullcontext()) as writer:
+            frames.writer = writer
+            result = run_frames(dart, track, settings, frames, progress=progress, winding=job.stats is not None)
+            if not result.frames:
+                raise _NothingToKeep(result)
+    except _NothingToKeep as nothing:
+        result = nothing.result
+    if job.preview and result.frames:
+        frames.render_preview(job, dart, track, progress)
+    stats = summary(result, len(dart.vertices))
+    if job.stats:
+        with atomic_path(job.stats) as tmp:
+            Path(tmp).write_text(json.dumps(stats, indent=1))
+    kept = keep_frames and bool(frames.garment)
+    return Simulated(garment=np.stack(frames.garment) if kept else None, body=np.stack(frames.body) if kept else None,
+                     garment_faces=dart.faces, body_faces=np.asarray(track.faces), fps=settings.fps, stats=stats,
+                     stable=result.stable, message=result.message)
