@@ -205,9 +205,7 @@ def run_jobs(jobs: Iterable[Job], out_dir: str | os.PathLike, function: JobFunct
         raise ValueError("job ids must be unique")
     out_dir = Path(out_dir)
     check_out_dir(out_dir)
-    for parent in {(out_dir / job.path).parent for job in jobs}:
-        for stale in parent.glob(".*.tmp-*"):
-            shutil.rmtree(stale, ignore_errors=True)
+    _remove_temporaries(out_dir, jobs)
     manifest = out_dir / MANIFEST
     known = {job.id for job in jobs}
     rows = {key: row for key, row in read_manifest(manifest).items() if key in known and row.get("status") not in FINISHED}
@@ -239,5 +237,15 @@ def run_jobs(jobs: Iterable[Job], out_dir: str | os.PathLike, function: JobFunct
                     bar.update(1)
                     bar.set_postfix_str(f"{sum(r['status'] == 'failed' for r in rows.values())} failed", refresh=False)
     bar.close()
+    # Every job is done: a temporary folder left now is a killed run's, written after the sweep above
+    # by a worker that outlived its driver (Ray reaps such workers only seconds later).
+    _remove_temporaries(out_dir, jobs)
     _write_manifest(manifest, jobs, rows)
     return [rows[job.id] for job in jobs]
+
+
+def _remove_temporaries(out_dir: Path, jobs: list[Job]) -> None:
+    """Remove the temporary job folders (``.<id>.tmp-*``) beside the jobs' folders."""
+    for parent in {(out_dir / job.path).parent for job in jobs}:
+        for stale in parent.glob(".*.tmp-*"):
+            shutil.rmtree(stale, ignore_errors=True)

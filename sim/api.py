@@ -30,12 +30,14 @@ UNSTABLE_EXIT = 3
 
 @dataclass
 class SimJob:
-    """One simulation: the garment (a DART, a ``garment.npz`` or a shipped name) on the body posed by
-    ``motion`` (a ``Motion``, an AMASS ``.npz`` or a shipped name), and where its results go.
+    """One simulation: the garment (a DART, a ``garment.npz`` or a shipped name; or a list of them,
+    an outfit, inner layer first) on the body posed by ``motion`` (a ``Motion``, an AMASS ``.npz``
+    or a shipped name), and where its results go.
 
     ``start``/``end``/``frames`` count motion frames at ``settings.fps``; ``body`` is an SMPL-format
     file (default: the bundled body); ``betas`` the shape simulated on (default: the DART's own);
-    ``material`` replaces the garment's; ``seams`` are ``NAME=REGIME[:STIFFNESS]`` settings.
+    ``material`` replaces every garment's; ``seams`` are ``NAME=REGIME[:STIFFNESS]`` settings (in an
+    outfit NAME applies to every garment with that seam, ``GARMENT/NAME`` to one).
     ``output``: a USD file (.usd/.usda/.usdc) or a folder of OBJ/PLY frames (``format``); ``stats``:
     a JSON of every frame's measures; ``preview``: a .gif/.mp4/.png picture of the run."""
 
@@ -94,6 +96,8 @@ class SimJob:
     def to_dict(self) -> dict:
         """The job as JSON-able values (garment and motion given as names or paths)."""
         values = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "settings"}
+        if isinstance(self.garment, (list, tuple)):
+            values["garment"] = [str(g) for g in self.garment]
         values["betas"] = None if self.betas is None else [float(b) for b in self.betas]
         values["seams"] = list(self.seams)
         return {**{k: str(v) if isinstance(v, os.PathLike) else v for k, v in values.items()},
@@ -114,7 +118,9 @@ class SimJob:
 @dataclass
 class Simulated:
     """A finished run. ``garment`` [F,V,3] and ``body`` [F,B,3] are the recorded frames (world frame,
-    Z up, metres; None unless kept), ``garment_faces`` and ``body_faces`` their triangles, ``stats``
+    Z up, metres; None unless kept), ``garment_faces`` and ``body_faces`` their triangles (an
+    outfit's garments one after the other: ``garment_slices[k]`` are garment ``garment_names[k]``'s
+    vertices), ``stats``
     the ``--stats`` document (settings, totals, per-frame strain, penetration, seam gaps ...);
     ``stable`` False: the run stopped at ``message`` and the frames before it are what it kept."""
 
@@ -126,6 +132,8 @@ class Simulated:
     stats: dict
     stable: bool
     message: str
+    garment_names: list[str] = field(default_factory=lambda: ["garment"])
+    garment_slices: list[slice] = field(default_factory=list)
 
     @property
     def exit_code(self) -> int:
@@ -154,17 +162,56 @@ def _frame_range(job: SimJob, count: int) -> tuple[int, int]:
     return job.start, end
 
 
-def _load_dart(job: SimJob):
+@dataclass
+class _Dressing:
+    """The garments of a job (one, or an outfit's, inner first) and their names (``garment`` for a
+    lone garment, as darts-sim has always written it; ``sim.outfit.garment_names`` in an outfit)."""
+
+    darts: list
+    names: list[str]
+
+    @property
+    def slices(self) -> list[slice]:
+        ends = np.cumsum([0] + [len(d.vertices) for d in self.darts])
+        return [slice(a, b) for a, b in zip(ends[:-1], ends[1:])]
+
+    @property
+    def faces(self) -> np.ndarray:
+        """Every garment's triangles, indexing the garments' vertices one after the other."""
+        return np.concatenate([d.faces + s.start for d, s in zip(self.darts, self.slices)])
+
+    def colors(self, dart) -> np.ndarray:
+        from darts.dart.export import panel_colors
+
+        return panel_colors(len(dart.panel_names))[dart.panel]
+
+
+def _load_garments(job: SimJob) -> _Dressing:
     from darts.dart.io import load_dart
     from darts.dart.model import MATERIALS, Dart, parse_seam_setting
+    from sim.outfit import garment_names
 
+    given = list(job.garment) if isinstance(job.garment, (list, tuple)) else [job.garment]
+    if not given:
+        raise DartsInputError(None, "no garment given")
     # A shallow copy is enough: material and seams are replaced below, never changed in place.
-    dart = replace(job.garment) if isinstance(job.garment, Dart) else load_dart(resolve_garment(job.garment))
-    if job.material is not None:
-        dart.material_name, dart.material = job.material, dict(MATERIALS[job.material])
+    darts = [replace(g) if isinstance(g, Dart) else load_dart(resolve_garment(g)) for g in given]
+    labels = [g.category if isinstance(g, Dart) else Path(str(g)).stem for g in given]
+    names = garment_names(labels) if len(darts) > 1 else ["garment"]
+    for dart in darts:
+        if job.material is not None:
+            dart.material_name, dart.material = job.material, dict(MATERIALS[job.material])
     for text in job.seams:
-        dart.set_seam(*parse_seam_setting(text))
-    return dart
+        name, regime, stiffness = parse_seam_setting(text)
+        owner, _, seam = name.rpartition("/")
+        if owner and owner not in names:
+            raise DartsInputError(None, f"seam setting '{text}': no garment '{owner}' (garments: {', '.join(names)})")
+        chosen = [d for d, n in zip(darts, names) if n == owner or (not owner and (seam == "all" or seam in d.seam_names))]
+        if not chosen:
+            darts[0].seam(seam)  # no garment has it: the error names the seams there are
+        for dart in chosen:
+            dart.set_seam(seam, regime, stiffness)
+    return _Dressing(darts, names)
 
 
 def _load_motion(job: SimJob):
@@ -182,7 +229,7 @@ def _shape(job: SimJob, dart, body) -> tuple[np.ndarray, np.ndarray]:
     """(the DART's own betas, the betas to simulate on), checked against the body."""
     own = np.asarray(dart.body_betas, np.float64)
     if len(own) > body.num_betas:
-        raise DartsInputError(job.garment if isinstance(job.garment, (str, Path)) else None,
+        raise DartsInputError(job.garment if isinstance(job.garment, (str, os.PathLike)) else None,
                               f"was made for {len(own)} shape coefficients, the body has {body.num_betas}")
     if job.betas is None:
         return own, own
@@ -210,44 +257,43 @@ class _Frames:
 
         total = len(track.vertices) - track.settle_frames
         self.drawn = set(frames_to_draw(total, job.preview).tolist()) if job.preview else set()
-        self.keep, self.writer = keep, None
+        self.keep, self.writer, self.parts = keep, None, []
         self.seen, self.numbers, self.garment, self.body = 0, [], [], []
 
     def __call__(self, garment: np.ndarray, body: np.ndarray) -> None:
         if self.writer is not None:
-            self.writer.write_frame({"garment": garment, "body": body})
+            self.writer.write_frame({"body": body, **{name: garment[part] for name, part in self.parts}})
         if self.keep or self.seen in self.drawn:
             self.numbers.append(self.seen)
             self.garment.append(garment.astype(np.float32))
             self.body.append(body.astype(np.float32))
         self.seen += 1
 
-    def render_preview(self, job: SimJob, dart, track, progress: bool) -> None:
-        from darts.dart.export import panel_colors
+    def render_preview(self, job: SimJob, dressing: _Dressing, track, progress: bool) -> None:
         from darts.preview import Animation, render_preview
 
         drawn = [i for i, n in enumerate(self.numbers) if n in self.drawn]
-        animation = Animation(faces={"body": np.asarray(track.faces), "garment": dart.faces},
+        animation = Animation(faces={"body": np.asarray(track.faces), "garment": dressing.faces},
                               colors={"body": np.full((len(track.faces), 3), 0.8),
-                                      "garment": panel_colors(len(dart.panel_names))[dart.panel]},
+                                      "garment": np.concatenate([dressing.colors(d) for d in dressing.darts])},
                               frames={"garment": np.stack([self.garment[i] for i in drawn]),
                                       "body": np.stack([self.body[i] for i in drawn])},
                               fps=job.settings.fps, numbers=np.array([self.numbers[i] for i in drawn]), total=self.seen)
         render_preview(animation, job.preview, progress=progress)
 
 
-def _writer(job: SimJob, dart, track):
-    """The output writer with the body (grey) and the garment (coloured by panel) declared."""
-    from darts.dart.export import panel_colors
+def _writer(job: SimJob, dressing: _Dressing, track):
+    """The output writer with the body (grey) and each garment (coloured by panel) declared."""
     from exporters.sequence import MeshSequenceWriter
     from exporters.usd import UsdAnimationWriter
 
     out = Path(job.output)
     writer = UsdAnimationWriter(out, job.settings.fps) if out.suffix else MeshSequenceWriter(out, job.settings.fps, job.format)
     writer.add_mesh("body", track.faces, track.vertices.shape[1], np.full((len(track.faces), 3), 0.8))
-    writer.add_mesh("garment", dart.faces, len(dart.vertices), panel_colors(len(dart.panel_names))[dart.panel])
-    if job.seam_curves and len(dart.pairs):
-        writer.add_curves("garment", dart.pairs)
+    for name, dart in zip(dressing.names, dressing.darts):
+        writer.add_mesh(name, dart.faces, len(dart.vertices), dressing.colors(dart))
+        if job.seam_curves and len(dart.pairs):
+            writer.add_curves(name, dart.pairs)
     return writer
 
 
@@ -269,30 +315,37 @@ def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Si
     from sim.run import summary
 
     settings = job.check()
-    dart = _load_dart(job)
+    dressing = _load_garments(job)
     motion = _load_motion(job)
     body = load_body(job.body)
     if settings.device != "cpu":
         _check_device(settings.device)
-    own, target = _shape(job, dart, body)
+    own, target = _shape(job, dressing.darts[0], body)
+    garments = dressing.darts[0]
+    if len(dressing.darts) > 1:
+        from sim.outfit import outfit_model
+
+        garments = outfit_model(dressing.darts, dressing.names, body.shaped(own)[0][0].double().numpy(), body.faces)
     track = build_body_track(body, motion, settings.fps, job.settle, betas=target, start_betas=own, progress=progress)
 
     frames = _Frames(job, track, keep_frames)
+    frames.parts = list(zip(dressing.names, dressing.slices))
     try:
-        with (_writer(job, dart, track) if job.output is not None else nullcontext()) as writer:
+        with (_writer(job, dressing, track) if job.output is not None else nullcontext()) as writer:
             frames.writer = writer
-            result = run_frames(dart, track, settings, frames, progress=progress, winding=job.stats is not None)
+            result = run_frames(garments, track, settings, frames, progress=progress, winding=job.stats is not None)
             if not result.frames:
                 raise _NothingToKeep(result)
     except _NothingToKeep as nothing:
         result = nothing.result
     if job.preview and result.frames:
-        frames.render_preview(job, dart, track, progress)
-    stats = summary(result, len(dart.vertices))
+        frames.render_preview(job, dressing, track, progress)
+    stats = summary(result, sum(len(d.vertices) for d in dressing.darts))
     if job.stats:
         with atomic_path(job.stats) as tmp:
             Path(tmp).write_text(json.dumps(stats, indent=1))
     kept = keep_frames and bool(frames.garment)
     return Simulated(garment=np.stack(frames.garment) if kept else None, body=np.stack(frames.body) if kept else None,
-                     garment_faces=dart.faces, body_faces=np.asarray(track.faces), fps=settings.fps, stats=stats,
-                     stable=result.stable, message=result.message)
+                     garment_faces=dressing.faces, body_faces=np.asarray(track.faces), fps=settings.fps, stats=stats,
+                     stable=result.stable, message=result.message, garment_names=dressing.names,
+                     garment_slices=dressing.slices)

@@ -1,4 +1,5 @@
-"""``darts-sim GARMENT MOTION -o OUT``: drape a DART on the body and simulate it through a motion.
+"""``darts-sim GARMENT [GARMENT ...] MOTION -o OUT``: drape a DART (or an outfit of several, inner
+layer first) on the body and simulate it through a motion.
 
 The command's arguments make a ``sim.api.SimJob`` (``job_from_args``), run by ``sim.api.run_job``
 as the Python API and ``darts batch`` run theirs. Only the parser's own needs are imported at
@@ -40,7 +41,9 @@ def parser() -> argparse.ArgumentParser:
         description="Simulate a DART garment on a body posed by an AMASS motion (Warp cloth solver). "
                     "Output frames are in the AMASS world frame: Z up, metres.")
     p.add_argument("--version", action="version", version=f"darts-sim {__version__}")
-    p.add_argument("garment", metavar="GARMENT", help=garment_help())
+    p.add_argument("garment", metavar="GARMENT", nargs="+",
+                   help=garment_help() + "; several make an outfit, inner layer first (a top tucked into trousers "
+                        "before them, a top worn over them after)")
     p.add_argument("motion", metavar="MOTION", help=motion_help())
     p.add_argument("-o", "--output", metavar="OUT", required=True,
                    help="OUT.usd/.usda/.usdc, or a directory for an OBJ/PLY sequence (see --format)")
@@ -97,7 +100,8 @@ def job_from_args(args):
                            max_speed=args.max_speed, self_contact=not args.no_self_contact,
                            continuous_collision=not args.no_ccd, crease_contacts=not args.no_crease,
                            tethers=not args.no_tethers)
-    return SimJob(args.garment, args.motion, settings, start=args.start, end=args.end, frames=args.frames,
+    garment = args.garment[0] if len(args.garment) == 1 else list(args.garment)
+    return SimJob(garment, args.motion, settings, start=args.start, end=args.end, frames=args.frames,
                   settle=args.settle, body=args.body, betas=args.betas, material=args.material, seams=tuple(args.seam),
                   output=args.output, format=args.format, seam_curves=args.seam_curves, stats=args.stats,
                   preview=args.preview)
@@ -113,7 +117,8 @@ _SETTING_FLAGS = {"fps": "--fps", "substeps": "--substeps", "iterations": "--ite
 def command_line(job) -> str:
     """The ``darts-sim`` command that runs ``job`` (for the record: ``darts batch`` runs jobs by the
     API); settings left at their defaults are left out."""
-    argv = [str(job.garment), str(job.motion), "-o", str(job.output)]
+    garments = job.garment if isinstance(job.garment, (list, tuple)) else [job.garment]
+    argv = [*(str(g) for g in garments), str(job.motion), "-o", str(job.output)]
     defaults = SimSettings()
     for name, flag in _SETTING_FLAGS.items():
         value = getattr(job.settings, name)

@@ -9,7 +9,10 @@
 - seam springs: one per *active* pair of a stiff, loose, repulsive or partial seam, with that
   seam's stiffness (N/m) and rest length (0, or > 0 when repulsive); each end has an anchor, a
   neighbour off every seam, which says which way the end retreats when coincident ends must part;
-- loops: each feature line as a loop of particles (for ``sim.tethers``).
+- loops: each feature line as a loop of particles (for ``sim.tethers``);
+- per constraint, the material's values (stretch stiffness per edge, bending stiffness per hinge)
+  and per particle its layer (the garment it belongs to: 0 for one garment; ``sim.outfit`` joins
+  several garments into one model, inner first).
 """
 from __future__ import annotations
 
@@ -38,6 +41,9 @@ class ClothModel:
     spring_stiffness: np.ndarray  # [S] N/m
     spring_seam: np.ndarray  # [S] index into seam_names
     spring_anchors: np.ndarray  # [S,2] an off-seam neighbour of each end (-1: none), for repulsion
+    edge_stiffness: np.ndarray  # [E] N/m, the stretch stiffness of each edge's material
+    hinge_bend: np.ndarray  # [H] N m, the bending stiffness k_b of each hinge's material
+    layer: np.ndarray  # [P] the garment (layer, inner first) of each particle
     seam_names: list[str]
     material: dict
     loops: dict = field(default_factory=dict)  # feature line name -> its closed loop of particle indices
@@ -48,8 +54,7 @@ class ClothModel:
         sprung = self.spring_stiffness > 0
         pairs = np.concatenate([self.edges, self.springs[sprung]]).astype(np.int32)
         rest = np.concatenate([self.edge_rest, self.spring_rest[sprung]])
-        stiffness = np.concatenate([np.full(len(self.edges), float(self.material["stretch_stiffness"])),
-                                    self.spring_stiffness[sprung]])
+        stiffness = np.concatenate([self.edge_stiffness, self.spring_stiffness[sprung]])
         return pairs, rest, stiffness
 
 
@@ -173,5 +178,7 @@ def cloth_model(dart: Dart) -> ClothModel:
         spring_rest=np.array([dart.seams[s].rest_length for s in seam_of]),
         spring_stiffness=np.array([dart.seams[s].stiffness for s in seam_of]),
         spring_seam=seam_of.astype(np.int64), seam_names=dart.seam_names, material=dict(dart.material),
+        edge_stiffness=np.full(len(edges), float(dart.material["stretch_stiffness"])),
+        hinge_bend=np.full(len(hinges), float(dart.material["bend_stiffness"])), layer=np.zeros(count, np.int64),
         loops={name: particle[np.asarray(loop, np.int64)] for name, loop in dart.lines.items()},
     )

@@ -2,7 +2,9 @@
 
 Frames handed to ``sink`` and measured are the recorded ones (after the settle period), in the
 world frame (Z up, metres). Seam gaps are measured on the DART's own vertices (both ends of every
-pair), penetration on the solver's particles.
+pair), penetration on the solver's particles. An outfit (``sim.outfit.Outfit``) runs the same way:
+``sink`` gets its garments' vertices one after the other, and each frame adds every garment's own
+measures and, with ``winding``, the layer order (``sim.outfit.layer_order``).
 """
 from __future__ import annotations
 
@@ -14,7 +16,8 @@ import numpy as np
 
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
-from sim.model import cloth_model
+from sim.model import ClothModel, cloth_model
+from sim.outfit import Outfit, layer_order
 from sim.quality import edge_strain, strain_summary, waist_height
 from sim.settings import SimSettings
 from sim.simulation import Simulation
@@ -48,15 +51,26 @@ def seam_gap_stats(dart: Dart, vertices: np.ndarray) -> dict[str, dict[str, floa
     return stats
 
 
-def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
+def _garment_measures(dart: Dart, vertices: np.ndarray, pelvis) -> dict:
+    """One garment's waist height (m above the pelvis, None without a waist line) and seam gaps."""
+    return {"waist_height": waist_height(dart, vertices, pelvis), "seam_gap": seam_gap_stats(dart, vertices)}
+
+
+def _layer_strain(model: ClothModel, strain: np.ndarray, layer: int) -> dict[str, float]:
+    return strain_summary(strain[model.layer[model.edges[:, 0]] == layer])
+
+
+def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
              sink: Callable[[np.ndarray, np.ndarray], None] | None = None, progress: bool = False,
              winding: bool = False) -> RunResult:
-    """Drape ``dart`` from its rest pose through ``track``; ``sink(garment [V,3], body [B,3])`` gets
-    every recorded frame; ``winding``: also measure penetration by the body's winding number. Stops early (``stable`` False) on a non-finite value or a particle faster
-    than ``settings.max_speed``."""
+    """Drape ``garments`` (a DART, or an outfit of several) from the rest pose through ``track``;
+    ``sink(garment [V,3], body [B,3])`` gets every recorded frame; ``winding``: also measure
+    penetration by the body's winding number (and an outfit's layer order). Stops early
+    (``stable`` False) on a non-finite value or a particle faster than ``settings.max_speed``."""
     from tqdm import tqdm
 
-    model = cloth_model(dart)
+    outfit = garments if isinstance(garments, Outfit) else None
+    model = outfit.model if outfit is not None else cloth_model(garments)
     solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
     result = RunResult(particles=len(model.rest), settings=solver.settings)
     total = len(track.vertices)
@@ -80,16 +94,26 @@ def simulate(dart: Dart, track: BodyTrack, settings: SimSettings,
             continue
         particles = solver.positions()
         vertices = particles[model.particle_of_vertex]
-        waist = waist_height(dart, vertices, None if track.pelvis is None else track.pelvis[k])
+        pelvis = None if track.pelvis is None else track.pelvis[k]
+        strain = edge_strain(model, particles)
+        frame = {"strain": strain_summary(strain), "penetration": measure.penetration,
+                 "penetration_in_body_overlap": measure.penetration_in_body_overlap,
+                 "penetration_winding": measure.penetration_winding,
+                 "max_speed": measure.max_speed, "self_intersections": measure.self_intersections}
+        if outfit is None:
+            frame.update(_garment_measures(garments, vertices, pelvis))
+        else:
+            each = {name: {"strain": _layer_strain(model, strain, layer), **_garment_measures(dart, part, pelvis)}
+                    for layer, (name, dart, part) in enumerate(zip(outfit.names, outfit.darts, outfit.split(vertices)))}
+            waists = [g["waist_height"] for g in each.values() if g["waist_height"] is not None]
+            frame.update(waist_height=waists[0] if waists else None, garments=each,
+                         seam_gap={f"{name}/{seam}": gap for name, g in each.items() for seam, gap in g["seam_gap"].items()},
+                         layers=layer_order(outfit, particles) if winding else None)
+        waist = frame["waist_height"]
         if waist is not None:
             settled = waist if not result.frames else result.frames[0]["waist_height"]
-        result.frames.append({"strain": strain_summary(edge_strain(model, particles)),
-                              "waist_height": waist, "waist_slide": None if waist is None else settled - waist,
-                              "penetration": measure.penetration,
-                              "penetration_in_body_overlap": measure.penetration_in_body_overlap,
-                              "penetration_winding": measure.penetration_winding,
-                              "max_speed": measure.max_speed, "self_intersections": measure.self_intersections,
-                              "seam_gap": seam_gap_stats(dart, vertices)})
+        frame["waist_slide"] = None if waist is None else settled - waist
+        result.frames.append(frame)
         if sink is not None:
             sink(vertices, track.vertices[k])
     bar.close()
@@ -121,5 +145,23 @@ def summary(result: RunResult, vertices: int) -> dict:
         if frames and frames[0]["waist_slide"] is not None else None,
         "self_contact": settings.self_contact,
         "max_seam_gap": {s: max(f["seam_gap"][s]["max"] for f in frames) for s in seams},
+        **_outfit_summary(frames),
         "frames": frames,
+    }
+
+
+def _outfit_summary(frames: list[dict]) -> dict:
+    """An outfit's totals: per garment its strain and largest seam gap, and the largest fraction of
+    each outer garment inside an inner one over the run (None unless measured)."""
+    if not frames or "garments" not in frames[0]:
+        return {}
+    names = list(frames[0]["garments"])
+    layers = frames[0]["layers"]
+    return {
+        "garments": {name: {"strain_mean": float(np.mean([f["garments"][name]["strain"]["mean"] for f in frames])),
+                            "strain_max": max(f["garments"][name]["strain"]["max"] for f in frames),
+                            "max_seam_gap": max((g["max"] for f in frames for g in f["garments"][name]["seam_gap"].values()),
+                                                default=0.0)}
+                     for name in names},
+        "max_layer_inside": None if layers is None else {pair: max(f["layers"][pair] for f in frames) for pair in layers},
     }

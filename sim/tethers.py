@@ -125,5 +125,5 @@ def loop_tethers(model: ClothModel, loops: list[np.ndarray], held: list[bool] | 
 def tethers(model: ClothModel, seed: int = 0):
     """Every tether of ``model`` (surface, then loop): pairs [T,2] and limits [T] (m)."""
     surface = surface_tethers(model, seed=seed)
-    loops = loop_tethers(model, list(model.loops.values()), [name in HELD_LOOPS for name in model.loops])
+    loops = loop_tethers(model, list(model.loops.values()), [name.split("/")[-1] in HELD_LOOPS for name in model.loops])
     return np.concatenate([surface[0], loops[0]]).astype(np.int64), np.concatenate([surface[1], loops[1]])

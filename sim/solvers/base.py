@@ -30,6 +30,17 @@ SELF_SEPARATION = 1.0
 SELF_EXCLUSION = 1.5
 
 
+#: metres between the layers of an outfit in ``exclusion_rest``: farther than any exclusion radius
+LAYERS_APART = 10.0
+
+
+def exclusion_rest(model: ClothModel) -> np.ndarray:
+    """The rest positions self-contact tells a particle's neighbours by: each layer (garment) of an
+    outfit moved ``LAYERS_APART`` from the last along X, so that two garments lying on each other at
+    rest are never neighbours and always collide."""
+    return model.rest + model.layer[:, None] * np.array([LAYERS_APART, 0.0, 0.0])
+
+
 def hinge_stiffness(model: ClothModel) -> np.ndarray:
     """Per-hinge bending stiffness kappa = k_b 3 |e|^2 / (A_1 + A_2) (N m), from the rest shape."""
     rest = model.rest
@@ -37,7 +48,7 @@ def hinge_stiffness(model: ClothModel) -> np.ndarray:
     area1 = 0.5 * np.linalg.norm(np.cross(j - i, k - i), axis=1)
     area2 = 0.5 * np.linalg.norm(np.cross(l - i, j - i), axis=1)
     edge2 = np.sum((j - i) ** 2, axis=1)
-    return model.material["bend_stiffness"] * 3.0 * edge2 / np.maximum(area1 + area2, 1e-12)
+    return model.hinge_bend * 3.0 * edge2 / np.maximum(area1 + area2, 1e-12)
 
 
 class Solver:
@@ -60,7 +71,7 @@ class Solver:
         self.wind = Wind(settings.wind, settings.gust, settings.seed)
         thickness = float(model.material["thickness"])
         self.self_contact = SelfContact(
-            state.x, model.rest, model.faces, model.edges, SELF_SEPARATION * thickness,
+            state.x, exclusion_rest(model), model.faces, model.edges, SELF_SEPARATION * thickness,
             max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * thickness + settings.self_contact_reach),
             device)
         self.damping = float(np.exp(-settings.damping / (settings.fps * settings.substeps)))  # per substep

@@ -63,7 +63,7 @@ class XpbdSolver(Solver):
         sprung = model.spring_stiffness > 0
         self.stretch = ColoredConstraints(model.edges, {
             "rest": model.edge_rest,
-            "compliance": _compliance(np.full(len(model.edges), model.material["stretch_stiffness"])),
+            "compliance": _compliance(model.edge_stiffness),
             "anchors": np.full((len(model.edges), 2), -1),
         }, self.count, self.device)
         self.seams = ColoredConstraints(model.springs[sprung], {

@@ -1,0 +1,171 @@
+"""Outfits: several DARTs on one body in one simulation, in layer order (inner first).
+
+The garments become one ``ClothModel``: their particles, constraints and loops side by side (each
+garment's indices shifted past the ones before), each edge and hinge with its own garment's
+stiffness, each particle with its layer. Self-contact then covers garment against garment as well
+as each garment against itself: ``sim.solvers.base.exclusion_rest`` moves every layer far from the
+others when it tells rest neighbours apart, so two garments lying on each other always collide.
+Thickness and friction are one per model: the outfit takes the largest of its garments'.
+
+Templates are all cut at the same ease from the body, so an outer garment lies on the inner one
+where they overlap. ``separate_layers`` starts them apart: each outer particle within
+``COVER`` of an inner garment is lifted along the body's normal until it is ``LAYER_GAP`` further
+from the body than the inner garment there, and the lift is spread a few edge rings so that it
+fades instead of stepping. The lifted shape is the outer garment's rest shape too (an outer garment
+is cut larger where it covers another), so the drape starts without intersections and without
+stretch. Everything here is in the body's canonical frame (Y up, metres).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from darts.dart.model import Dart
+from darts.errors import DartsInputError
+from sim.model import ClothModel, cloth_model, dihedral_angles
+
+#: metres from an inner garment within which an outer particle counts as covering it
+COVER = 0.03
+#: thicknesses between two layers where they overlap, at the start
+LAYER_GAP = 2.0
+#: edge rings over which a lift fades out
+LIFT_RINGS = 6
+
+
+@dataclass
+class Outfit:
+    """Garments (``darts``, named ``names``) joined into ``model``. The outfit's vertices are the
+    garments' vertices one after the other: garment k's are ``vertex_slices[k]``; its particles are
+    ``particle_slices[k]``; ``lift`` [P] is how far ``separate_layers`` moved each particle (m)."""
+
+    darts: list[Dart]
+    names: list[str]
+    model: ClothModel
+    vertex_slices: list[slice]
+    particle_slices: list[slice]
+    lift: np.ndarray
+
+    def split(self, vertices: np.ndarray) -> list[np.ndarray]:
+        """The outfit's vertices [V,3] as one array per garment."""
+        return [vertices[s] for s in self.vertex_slices]
+
+
+def garment_names(labels: list[str]) -> list[str]:
+    """Unique names for the garments (USD prims, stats keys): each label made a valid identifier,
+    with _2, _3 ... where two garments share one."""
+    names = []
+    for label in labels:
+        base = "".join(c if c.isalnum() else "_" for c in label) or "garment"
+        base = base if not base[0].isdigit() else f"g_{base}"
+        name, k = base, 2
+        while name in names:
+            name, k = f"{base}_{k}", k + 1
+        names.append(name)
+    return names
+
+
+def _join(models: list[ClothModel], names: list[str]) -> ClothModel:
+    """One model holding ``models`` side by side (indices shifted), loops and seams prefixed by name."""
+    offsets = np.cumsum([0] + [len(m.rest) for m in models])
+    seam_offsets = np.cumsum([0] + [len(m.seam_names) for m in models])
+
+    def cat(key, shift=True):
+        return np.concatenate([getattr(m, key) + (offsets[k] if shift else 0) for k, m in enumerate(models)])
+
+    anchors = np.concatenate([np.where(m.spring_anchors >= 0, m.spring_anchors + offsets[k], -1) for k, m in enumerate(models)])
+    material = dict(models[0].material)
+    material["thickness"] = max(float(m.material["thickness"]) for m in models)
+    material["friction"] = max(float(m.material["friction"]) for m in models)
+    return ClothModel(
+        rest=cat("rest", False), particle_of_vertex=cat("particle_of_vertex"), faces=cat("faces"), mass=cat("mass", False),
+        edges=cat("edges"), edge_rest=cat("edge_rest", False), hinges=cat("hinges"),
+        hinge_rest_angle=cat("hinge_rest_angle", False), springs=cat("springs"), spring_rest=cat("spring_rest", False),
+        spring_stiffness=cat("spring_stiffness", False),
+        spring_seam=np.concatenate([m.spring_seam + seam_offsets[k] for k, m in enumerate(models)]),
+        spring_anchors=anchors.reshape(-1, 2), edge_stiffness=cat("edge_stiffness", False),
+        hinge_bend=cat("hinge_bend", False), layer=np.concatenate([np.full(len(m.rest), k) for k, m in enumerate(models)]),
+        seam_names=[f"{names[k]}/{s}" for k, m in enumerate(models) for s in m.seam_names], material=material,
+        loops={f"{names[k]}/{line}": loop + offsets[k] for k, m in enumerate(models) for line, loop in m.loops.items()},
+    )
+
+
+def _ring_mean(values: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Each particle's mean over its edge neighbours (itself where it has none)."""
+    total = np.zeros_like(values)
+    count = np.zeros(len(values))
+    np.add.at(total, edges[:, 0], values[edges[:, 1]])
+    np.add.at(total, edges[:, 1], values[edges[:, 0]])
+    np.add.at(count, edges.reshape(-1), 1.0)
+    return np.where(count > 0, total / np.maximum(count, 1.0), values)
+
+
+def separate_layers(models: list[ClothModel], body_vertices: np.ndarray, body_faces: np.ndarray) -> list[np.ndarray]:
+    """The lift (m, along the body's normal) of every particle of each model, inner first, so that
+    where an outer garment covers an inner one it starts ``LAYER_GAP`` thicknesses further from the
+    body (module docstring); the models' rest shapes are moved by it in place."""
+    from darts.geometry.distance import SurfaceDistance
+
+    body = SurfaceDistance(body_vertices, body_faces)
+    thickness = max(float(m.material["thickness"]) for m in models)
+    lifts = [np.zeros(len(models[0].rest))]
+    for k in range(1, len(models)):
+        outer = models[k]
+        _, closest, _ = body.query(outer.rest, winding=False)
+        away = outer.rest - closest
+        height = np.linalg.norm(away, axis=1)
+        direction = away / np.maximum(height, 1e-9)[:, None]
+        need = np.zeros(len(outer.rest))
+        for inner in models[:k]:
+            gap, at, _ = SurfaceDistance(inner.rest, inner.faces).query(outer.rest, max_dist=COVER, winding=False)
+            covered = np.abs(gap) < 0.99 * COVER  # the query answers max_dist (in float32) where nothing is near
+            if covered.any():
+                inner_height, _, _ = body.query(at[covered], winding=False)
+                need[covered] = np.maximum(need[covered], np.abs(inner_height) + LAYER_GAP * thickness - height[covered])
+        lift = np.maximum(need, 0.0)
+        for _ in range(LIFT_RINGS):
+            lift = np.maximum(lift, 0.7 * _ring_mean(lift, outer.edges))
+        outer.rest[:] = outer.rest + lift[:, None] * direction
+        lifts.append(lift)
+    return lifts
+
+
+def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray, body_faces: np.ndarray) -> Outfit:
+    """``darts`` (inner first) as one model on the body at rest (canonical frame): the garments'
+    models joined after ``separate_layers``; rest lengths and angles of lifted garments re-measured."""
+    if len({d.body_model for d in darts}) > 1:
+        raise DartsInputError(None, "the garments of an outfit must be made for the same body "
+                                    f"(found {', '.join(sorted({d.body_model for d in darts}))})")
+    if any(not np.allclose(np.pad(d.body_betas, (0, 16))[:16], np.pad(darts[0].body_betas, (0, 16))[:16]) for d in darts):
+        raise DartsInputError(None, "the garments of an outfit must be made for the same body shape (betas)")
+    names = garment_names(labels)
+    models = [cloth_model(dart) for dart in darts]
+    lifts = separate_layers(models, body_vertices, body_faces)
+    models = [_remeasured(m) if lift.any() else m for m, lift in zip(models, lifts)]
+    vertex_edges = np.cumsum([0] + [len(d.vertices) for d in darts])
+    particle_edges = np.cumsum([0] + [len(m.rest) for m in models])
+    return Outfit(darts=list(darts), names=names, model=_join(models, names),
+                  vertex_slices=[slice(a, b) for a, b in zip(vertex_edges[:-1], vertex_edges[1:])],
+                  particle_slices=[slice(a, b) for a, b in zip(particle_edges[:-1], particle_edges[1:])],
+                  lift=np.concatenate(lifts))
+
+
+def _remeasured(model: ClothModel) -> ClothModel:
+    """``model`` with its edge rest lengths and hinge rest angles measured on its (lifted) rest shape."""
+    return replace(model, edge_rest=np.linalg.norm(model.rest[model.edges[:, 0]] - model.rest[model.edges[:, 1]], axis=1),
+                   hinge_rest_angle=dihedral_angles(model.rest, model.hinges))
+
+
+def layer_order(outfit: Outfit, particles: np.ndarray) -> dict[str, float]:
+    """For each pair of garments (inner, outer): the fraction of the outer garment's particles inside
+    the inner one by its generalized winding number (> 1/2: Jacobson et al. 2013; the garments are
+    open surfaces, oriented away from the body), keyed ``"outer in inner"``."""
+    from darts.geometry.distance import SurfaceDistance
+
+    model, found = outfit.model, {}
+    for j in range(len(outfit.names) - 1):
+        surface = SurfaceDistance(particles, model.faces[model.layer[model.faces[:, 0]] == j])
+        for k in range(j + 1, len(outfit.names)):
+            sign, _, _ = surface.query(particles[outfit.particle_slices[k]], winding=True)
+            found[f"{outfit.names[k]} in {outfit.names[j]}"] = float(np.mean(sign < 0))
+    return found

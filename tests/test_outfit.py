@@ -1,0 +1,107 @@
+"""Outfits (several garments in one simulation, inner layer first): coincident layers start apart,
+sheets dropped on each other stay apart and in order, and darts-sim writes one mesh per garment."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from darts.errors import DartsInputError
+from sim.outfit import LAYER_GAP, outfit_model
+from sim.self_contact import SelfContact
+from sim.settings import SimSettings
+from sim.simulation import Simulation
+from tests.helpers import sheet_dart
+
+SIDE = 0.2  # m, the sheets' side
+SPACING = 0.01
+
+#: The "body": a slab whose top face is z = 0 (Z up), under the sheets.
+SLAB = (np.array([[x, y, z] for z in (-0.2, 0.0) for y in (-1.0, 1.0) for x in (-1.0, 1.0)]),
+        np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4], [2, 6, 3], [3, 6, 7],
+                  [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]]))
+
+
+def _sheet(height: float):
+    n = int(round(SIDE / SPACING)) + 1
+    y, x = np.meshgrid(np.arange(n) * SPACING - SIDE / 2, np.arange(n) * SPACING - SIDE / 2, indexing="ij")
+    vertices = np.stack([x.ravel(), y.ravel(), np.full(x.size, height)], axis=1)
+    faces = []
+    for i in range(n - 1):
+        for j in range(n - 1):
+            a, b, c, d = i * n + j, i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1
+            faces += [[a, b, d], [a, d, c]] if (i + j) % 2 else [[a, b, c], [b, d, c]]
+    return sheet_dart(vertices, np.array(faces))
+
+
+def _drop(inner_height: float, outer_height: float, frames: int = 30, one_layer: bool = False):
+    """Drop an outer sheet and an inner one onto the slab; (lowest gap between an outer particle and
+    the inner particle under it, inner sheet's mean height, thickness, the outfit's lift, crossings)."""
+    inner, outer = _sheet(inner_height), _sheet(outer_height)
+    outfit = outfit_model([inner, outer], ["inner", "outer"], *SLAB)
+    model = outfit.model
+    if one_layer:  # the negative control: both sheets one garment, their coincident rest points neighbours
+        model.layer[:] = 0
+    body_vertices, body_faces = SLAB
+    solver = Simulation(model, model.rest, body_faces, body_vertices, SimSettings(ground=False))
+    checker = SelfContact(solver.x, model.rest + model.layer[:, None] * np.array([10.0, 0, 0]), model.faces,
+                          model.edges, 0.0, solver.self_contact.exclusion, "cpu")
+    crossings = []
+    for _ in range(frames):
+        solver.step_frame(body_vertices)
+        crossings.append(int(checker.crossing_edges().sum()))
+    x = solver.positions()
+    low, high = x[outfit.particle_slices[0]], x[outfit.particle_slices[1]]
+    middle = (np.abs(high[:, 0]) < 0.07) & (np.abs(high[:, 1]) < 0.07)
+    under = cKDTree(low[:, :2]).query(high[middle, :2])[1]
+    return (float(np.min(high[middle, 2] - low[under, 2])), float(low[:, 2].mean()), solver.thickness,
+            outfit.lift, max(crossings))
+
+
+def test_coincident_layers_start_apart_and_stay_in_order():
+    gap, inner_height, thickness, lift, crossings = _drop(0.02, 0.02)
+    assert lift[:len(lift) // 2].max() == 0.0  # the inner sheet stays where it is
+    assert np.all(lift[len(lift) // 2:] >= LAYER_GAP * thickness - 1e-6)  # the outer one lifted off it
+    assert inner_height < 0.01  # both have landed on the slab (from 2 cm)
+    assert gap > 0.5 * thickness and crossings == 0
+
+
+def test_a_sheet_dropped_onto_another_rests_on_it():
+    gap, inner_height, thickness, lift, crossings = _drop(0.005, 0.04)
+    assert lift.max() == 0.0  # 3.5 cm apart: nothing to separate
+    assert inner_height < 0.01 and 0.5 * thickness < gap < 3.0 * thickness and crossings == 0
+
+
+def test_as_one_garment_the_coincident_sheets_do_not_keep_apart():
+    """Negative control: with both sheets one layer, each particle's coincident twin on the other
+    sheet is its rest neighbour, never a contact, and the sheets do not stay a thickness apart."""
+    gap, _, thickness, _, _ = _drop(0.02, 0.02, one_layer=True)
+    assert gap < 0.5 * thickness
+
+
+def test_garments_for_different_bodies_are_refused():
+    inner, outer = _sheet(0.0), _sheet(0.01)
+    outer.body_model = "another-body"
+    with pytest.raises(DartsInputError, match="same body"):
+        outfit_model([inner, outer], ["a", "b"], *SLAB)
+
+
+def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, tmp_path):
+    from pxr import Usd, UsdGeom
+
+    out, stats_path = tmp_path / "outfit.usdc", tmp_path / "stats.json"
+    code, printed, err = run_sim("long-pants", "long-sleeve-top", "walk", "-o", out, "--stats", stats_path,
+                                 "--frames", 3, "--settle", 0.2, "--seam", "long_pants/waistband=loose")
+    assert code == 0, err
+    stage = Usd.Stage.Open(str(out))
+    prims = {str(p.GetPath()) for p in stage.Traverse()}
+    assert {"/World/body", "/World/long_pants", "/World/long_sleeve_top"} <= prims
+    top = np.array(UsdGeom.Mesh(stage.GetPrimAtPath("/World/long_sleeve_top")).GetPointsAttr().Get(2.0))
+    stats = json.loads(stats_path.read_text())
+    assert stats["garments"].keys() == {"long_pants", "long_sleeve_top"} and stats["vertices"] > len(top)
+    assert 0.0 <= stats["max_layer_inside"]["long_sleeve_top in long_pants"] <= 0.05
+    assert stats["max_penetration"] <= 0.01 and stats["stable"]
+    assert "long_pants/waistband" in stats["max_seam_gap"] and "long_sleeve_top/left_side" in stats["max_seam_gap"]
+    assert stats["frames"][0]["garments"]["long_pants"]["waist_height"] is not None
