@@ -34,14 +34,18 @@ class BodyContacts:
 
 class BodyCollider:
     """The moving body mesh (vertices [V,3], faces [F,3]) and its contacts with ``count`` particles
-    of a cloth ``thickness`` (m) thick with Coulomb ``friction``."""
+    of a cloth ``thickness`` (m) thick with Coulomb ``friction``; ``offset`` [count] (m) keeps a
+    particle that much further off the body (an outer layer's, over the layers under it)."""
 
     def __init__(self, body_faces: np.ndarray, body_vertices: np.ndarray, count: int, thickness: float,
-                 friction: float, settings: SimSettings):
+                 friction: float, settings: SimSettings, offset: np.ndarray | None = None):
         device = self.device = settings.device
         self.launch = Launcher(device)
         self.settings, self.count = settings, count
         self.thickness, self.friction_coefficient = float(thickness), float(friction)
+        self.offset_host = np.zeros(count) if offset is None else np.asarray(offset, np.float64)
+        self.offset = wp.array(self.offset_host.astype(np.float32), dtype=float, device=device)
+        self.max_offset = float(self.offset_host.max(initial=0.0))
         self.start = vec3_array(body_vertices, device)
         self.end = vec3_array(body_vertices, device)
         self.points = vec3_array(body_vertices, device)
@@ -94,7 +98,8 @@ class BodyCollider:
         search = substep % interval == 0
         self.place((substep + 1) / settings.substeps, refit=search)
         if search:
-            reach = self.thickness + settings.contact_reach + settings.contact_skin + interval * dt * self.speed
+            reach = (self.thickness + self.max_offset + settings.contact_reach + settings.contact_skin
+                     + interval * dt * self.speed)
             started = self.time + substep * dt
             self.launch(kernels.find_contacts, self.count,
                         [self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
@@ -112,7 +117,7 @@ class BodyCollider:
         ground, which has the last word; the pushes add up for ``friction``."""
         c, s = self.contact, self.second
         self.launch(kernels.resolve_contacts, self.count,
-                    [x, c.point, c.normal, c.face, s.point, s.normal, s.face, self.thickness,
+                    [x, c.point, c.normal, c.face, s.point, s.normal, s.face, self.thickness, self.offset,
                      int(self.settings.ground), 0.0, self.body_push, self.ground_push])
 
     def friction(self, x, x_start, dt: float) -> None:
@@ -126,4 +131,4 @@ class BodyCollider:
         if self.contact.face.numpy()[particle] < 0:
             return None
         point, normal = self.contact.point.numpy()[particle], self.contact.normal.numpy()[particle]
-        return self.thickness - float(np.dot(x - point, normal))
+        return self.thickness + float(self.offset_host[particle]) - float(np.dot(x - point, normal))

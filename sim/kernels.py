@@ -232,19 +232,21 @@ def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=w
                      contact_normal: wp.array(dtype=wp.vec3), contact_face: wp.array(dtype=wp.int32),
                      second_point: wp.array(dtype=wp.vec3), second_normal: wp.array(dtype=wp.vec3),
                      second_face: wp.array(dtype=wp.int32),
-                     thickness: float, ground: int, ground_height: float, body_push: wp.array(dtype=float),
-                     ground_push: wp.array(dtype=float)):
-    """Move particles to ``thickness`` outside the body's tangent plane at their contact, and that
-    of their second contact where they have one (the smallest move clearing both), and above the
-    ground plane z = ground_height, adding up how far each was pushed."""
+                     thickness: float, offset: wp.array(dtype=float), ground: int, ground_height: float,
+                     body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
+    """Move particles to ``thickness`` + their ``offset`` (an outer layer's, over the layers under
+    it) outside the body's tangent plane at their contact, and that of their second contact where
+    they have one (the smallest move clearing both), and ``thickness`` above the ground plane z =
+    ground_height, adding up how far each was pushed."""
     i = wp.tid()
     p = x[i]
     if contact_face[i] >= 0:
+        off = thickness + offset[i]
         n1 = contact_normal[i]
-        d1 = thickness - wp.dot(p - contact_point[i], n1)
+        d1 = off - wp.dot(p - contact_point[i], n1)
         move = wp.max(d1, 0.0) * n1
         if second_face[i] >= 0:
-            move = two_plane_push(d1, n1, thickness - wp.dot(p - second_point[i], second_normal[i]), second_normal[i])
+            move = two_plane_push(d1, n1, off - wp.dot(p - second_point[i], second_normal[i]), second_normal[i])
         push = wp.length(move)
         if push > 0.0:
             p = p + move

@@ -44,6 +44,7 @@ class ClothModel:
     edge_stiffness: np.ndarray  # [E] N/m, the stretch stiffness of each edge's material
     hinge_bend: np.ndarray  # [H] N m, the bending stiffness k_b of each hinge's material
     layer: np.ndarray  # [P] the garment (layer, inner first) of each particle
+    body_offset: np.ndarray  # [P] m kept off the body beyond the thickness (outer layers over inner ones)
     seam_names: list[str]
     material: dict
     loops: dict = field(default_factory=dict)  # feature line name -> its closed loop of particle indices
@@ -180,5 +181,6 @@ def cloth_model(dart: Dart) -> ClothModel:
         spring_seam=seam_of.astype(np.int64), seam_names=dart.seam_names, material=dict(dart.material),
         edge_stiffness=np.full(len(edges), float(dart.material["stretch_stiffness"])),
         hinge_bend=np.full(len(hinges), float(dart.material["bend_stiffness"])), layer=np.zeros(count, np.int64),
+        body_offset=np.zeros(count),
         loops={name: particle[np.asarray(loop, np.int64)] for name, loop in dart.lines.items()},
     )

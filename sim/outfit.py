@@ -31,6 +31,8 @@ COVER = 0.03
 LAYER_GAP = 2.0
 #: edge rings over which a lift fades out
 LIFT_RINGS = 6
+#: thicknesses a particle keeps off the body beyond its own, per inner garment it covers at rest
+LAYER_OFFSET = 1.0
 
 
 @dataclass
@@ -84,7 +86,7 @@ def _join(models: list[ClothModel], names: list[str]) -> ClothModel:
         spring_stiffness=cat("spring_stiffness", False),
         spring_seam=np.concatenate([m.spring_seam + seam_offsets[k] for k, m in enumerate(models)]),
         spring_anchors=anchors.reshape(-1, 2), edge_stiffness=cat("edge_stiffness", False),
-        hinge_bend=cat("hinge_bend", False), layer=np.concatenate([np.full(len(m.rest), k) for k, m in enumerate(models)]),
+        hinge_bend=cat("hinge_bend", False), body_offset=cat("body_offset", False), layer=np.concatenate([np.full(len(m.rest), k) for k, m in enumerate(models)]),
         seam_names=[f"{names[k]}/{s}" for k, m in enumerate(models) for s in m.seam_names], material=material,
         loops={f"{names[k]}/{line}": loop + offsets[k] for k, m in enumerate(models) for line, loop in m.loops.items()},
     )
@@ -100,25 +102,28 @@ def _ring_mean(values: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return np.where(count > 0, total / np.maximum(count, 1.0), values)
 
 
-def separate_layers(models: list[ClothModel], body_vertices: np.ndarray, body_faces: np.ndarray) -> list[np.ndarray]:
+def separate_layers(models: list[ClothModel], body_vertices: np.ndarray,
+                    body_faces: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """The lift (m, along the body's normal) of every particle of each model, inner first, so that
     where an outer garment covers an inner one it starts ``LAYER_GAP`` thicknesses further from the
-    body (module docstring); the models' rest shapes are moved by it in place."""
+    body (module docstring), and how many inner garments each particle covers; the models' rest
+    shapes are moved by the lift in place."""
     from darts.geometry.distance import SurfaceDistance
 
     body = SurfaceDistance(body_vertices, body_faces)
     thickness = max(float(m.material["thickness"]) for m in models)
-    lifts = [np.zeros(len(models[0].rest))]
+    lifts, covers = [np.zeros(len(models[0].rest))], [np.zeros(len(models[0].rest))]
     for k in range(1, len(models)):
         outer = models[k]
         _, closest, _ = body.query(outer.rest, winding=False)
         away = outer.rest - closest
         height = np.linalg.norm(away, axis=1)
         direction = away / np.maximum(height, 1e-9)[:, None]
-        need = np.zeros(len(outer.rest))
+        need, count = np.zeros(len(outer.rest)), np.zeros(len(outer.rest))
         for inner in models[:k]:
             gap, at, _ = SurfaceDistance(inner.rest, inner.faces).query(outer.rest, max_dist=COVER, winding=False)
             covered = np.abs(gap) < 0.99 * COVER  # the query answers max_dist (in float32) where nothing is near
+            count += covered
             if covered.any():
                 inner_height, _, _ = body.query(at[covered], winding=False)
                 need[covered] = np.maximum(need[covered], np.abs(inner_height) + LAYER_GAP * thickness - height[covered])
@@ -127,7 +132,8 @@ def separate_layers(models: list[ClothModel], body_vertices: np.ndarray, body_fa
             lift = np.maximum(lift, 0.7 * _ring_mean(lift, outer.edges))
         outer.rest[:] = outer.rest + lift[:, None] * direction
         lifts.append(lift)
-    return lifts
+        covers.append(count)
+    return lifts, covers
 
 
 def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray, body_faces: np.ndarray) -> Outfit:
@@ -140,7 +146,9 @@ def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray
         raise DartsInputError(None, "the garments of an outfit must be made for the same body shape (betas)")
     names = garment_names(labels)
     models = [cloth_model(dart) for dart in darts]
-    lifts = separate_layers(models, body_vertices, body_faces)
+    lifts, covers = separate_layers(models, body_vertices, body_faces)
+    thickness = max(float(m.material["thickness"]) for m in models)
+    models = [replace(m, body_offset=LAYER_OFFSET * thickness * c) for m, c in zip(models, covers)]
     models = [_remeasured(m) if lift.any() else m for m, lift in zip(models, lifts)]
     vertex_edges = np.cumsum([0] + [len(d.vertices) for d in darts])
     particle_edges = np.cumsum([0] + [len(m.rest) for m in models])

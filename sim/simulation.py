@@ -51,7 +51,7 @@ class Simulation:
         self.state = ClothState(positions, device)  # what every substep writes
         self.previous = ClothState(positions, device)  # the state the substep started from
         self.collider = BodyCollider(body_faces, body_vertices, self.count, self.thickness,
-                                     float(model.material["friction"]), settings)
+                                     float(model.material["friction"]), settings, model.body_offset)
         self.solver = solver_class(settings.solver)(model, self.state, settings)
         # The same body surface with winding-number support, refit only to measure.
         self._winding = wp.Mesh(points=self.collider.points, indices=self.collider.mesh.indices,

@@ -38,12 +38,14 @@ def _sheet(height: float):
 
 def _drop(inner_height: float, outer_height: float, frames: int = 30, one_layer: bool = False):
     """Drop an outer sheet and an inner one onto the slab; (lowest gap between an outer particle and
-    the inner particle under it, inner sheet's mean height, thickness, the outfit's lift, crossings)."""
+    the inner particle under it, inner sheet's mean height, thickness, the outfit's lift, crossings,
+    the particles' offsets off the body)."""
     inner, outer = _sheet(inner_height), _sheet(outer_height)
     outfit = outfit_model([inner, outer], ["inner", "outer"], *SLAB)
     model = outfit.model
     if one_layer:  # the negative control: both sheets one garment, their coincident rest points neighbours
         model.layer[:] = 0
+        model.body_offset[:] = 0.0
     body_vertices, body_faces = SLAB
     solver = Simulation(model, model.rest, body_faces, body_vertices, SimSettings(ground=False))
     checker = SelfContact(solver.x, model.rest + model.layer[:, None] * np.array([10.0, 0, 0]), model.faces,
@@ -57,27 +59,29 @@ def _drop(inner_height: float, outer_height: float, frames: int = 30, one_layer:
     middle = (np.abs(high[:, 0]) < 0.07) & (np.abs(high[:, 1]) < 0.07)
     under = cKDTree(low[:, :2]).query(high[middle, :2])[1]
     return (float(np.min(high[middle, 2] - low[under, 2])), float(low[:, 2].mean()), solver.thickness,
-            outfit.lift, max(crossings))
+            outfit.lift, max(crossings), model.body_offset)
 
 
 def test_coincident_layers_start_apart_and_stay_in_order():
-    gap, inner_height, thickness, lift, crossings = _drop(0.02, 0.02)
+    gap, inner_height, thickness, lift, crossings, offset = _drop(0.02, 0.02)
     assert lift[:len(lift) // 2].max() == 0.0  # the inner sheet stays where it is
     assert np.all(lift[len(lift) // 2:] >= LAYER_GAP * thickness - 1e-6)  # the outer one lifted off it
+    assert np.all(offset[len(offset) // 2:] == pytest.approx(thickness)) and not offset[:len(offset) // 2].any()
     assert inner_height < 0.01  # both have landed on the slab (from 2 cm)
     assert gap > 0.5 * thickness and crossings == 0
 
 
 def test_a_sheet_dropped_onto_another_rests_on_it():
-    gap, inner_height, thickness, lift, crossings = _drop(0.005, 0.04)
+    gap, inner_height, thickness, lift, crossings, _ = _drop(0.005, 0.04)
     assert lift.max() == 0.0  # 3.5 cm apart: nothing to separate
     assert inner_height < 0.01 and 0.5 * thickness < gap < 3.0 * thickness and crossings == 0
 
 
 def test_as_one_garment_the_coincident_sheets_do_not_keep_apart():
-    """Negative control: with both sheets one layer, each particle's coincident twin on the other
-    sheet is its rest neighbour, never a contact, and the sheets do not stay a thickness apart."""
-    gap, _, thickness, _, _ = _drop(0.02, 0.02, one_layer=True)
+    """Negative control: with both sheets one layer (no layer offset off the body either), each
+    particle's coincident twin on the other sheet is its rest neighbour, never a contact, and the
+    sheets do not stay a thickness apart."""
+    gap, _, thickness, _, _, _ = _drop(0.02, 0.02, one_layer=True)
     assert gap < 0.5 * thickness
 
 
