@@ -12,6 +12,7 @@ import pytest
 
 from darts.dart.build import make_dart
 from darts.dart.io import save_dart
+from darts.errors import DartsInputError
 from darts.jobs import MANIFEST, read_manifest
 from sim.batch.spec import load_jobs
 
@@ -51,6 +52,19 @@ def test_example_spec_is_the_cross_product():
     broad = next(j for j in jobs if j.inputs["body"] == "broad")
     assert broad.inputs["betas"] == [1.5, 0.8] and "--betas 1.5 0.8" in broad.inputs["command"]
     assert all("--frames 6 --settle 0.3" in j.inputs["command"] for j in jobs)
+
+
+def test_an_outfit_is_one_job_of_its_garments(tmp_path):
+    spec = tmp_path / "outfits.toml"
+    spec.write_text('[sim]\nframes = 2\n[sweep]\ngarments = [["long-pants", "long-sleeve-top"], "short-skirt"]\n'
+                    'motions = ["walk"]\n')
+    outfit, single = load_jobs(spec)
+    assert outfit.inputs["job"]["garment"] == ["long-pants", "long-sleeve-top"] and single.inputs["garment"] == "short-skirt"
+    assert outfit.inputs["command"].startswith("darts-sim long-pants long-sleeve-top walk -o")
+    assert outfit.id.startswith("long-pants-long-sleeve-top_walk_mean")
+    spec.write_text('[sweep]\ngarments = [["long-pants", "no-such-top"]]\nmotions = ["walk"]\n')
+    with pytest.raises(DartsInputError, match="no-such-top"):
+        load_jobs(spec)
 
 
 def test_killed_batch_resumes_without_redoing_finished_jobs(coarse_garments, tmp_path):

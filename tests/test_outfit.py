@@ -109,3 +109,31 @@ def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, t
     assert stats["max_penetration"] <= 0.01 and stats["stable"]
     assert "long_pants/waistband" in stats["max_seam_gap"] and "long_sleeve_top/left_side" in stats["max_seam_gap"]
     assert stats["frames"][0]["garments"]["long_pants"]["waist_height"] is not None
+
+
+@pytest.mark.parametrize("tucked", [True, False], ids=["tucked", "worn-over"])
+def test_a_tucked_top_stays_under_the_waistband_through_a_walk(body, tucked):
+    """A top named before the trousers is tucked in: its hem starts under the waistband and stays
+    there (inside the trousers by their winding number) through a stretch of the walk, and the
+    trousers never go inside the top. Named after them, the same top hangs over them, its hem
+    outside (the control: the first assertion can fail)."""
+    import sim
+    from darts.dart.build import make_dart
+    from darts.geometry.distance import SurfaceDistance
+
+    top, pants = (make_dart(name, body, edge_length=0.025) for name in ("long-sleeve-top", "long-pants"))
+    run = sim.simulate([top, pants] if tucked else [pants, top], "walk", frames=20, settle=0.3, winding=True)
+    assert run.stable, run.message
+    top_part, pants_part = run.garment_slices if tucked else run.garment_slices[::-1]
+    hem = top.lines["hem"]
+    inside = []
+    for frame in run.garment:
+        frame = frame.astype(np.float64)
+        sign, _, _ = SurfaceDistance(frame[pants_part], pants.faces).query(frame[top_part][hem], winding=True)
+        inside.append(float(np.mean(sign < 0)))
+    if tucked:
+        assert min(inside) >= 0.95, inside
+        assert run.stats["max_layer_inside"]["long_pants in long_sleeve_top"] <= 0.01
+    else:
+        assert max(inside) <= 0.05, inside
+        assert run.stats["max_layer_inside"]["long_sleeve_top in long_pants"] <= 0.01

@@ -126,6 +126,14 @@ class _Checker:
                 self.fail(where, f"{text}: {exc.problem}")
         return text
 
+    def garment(self, value, where: str):
+        """A garment (a name or path) or an outfit (a list of them, inner layer first)."""
+        if isinstance(value, list):
+            if not value:
+                self.fail(where, "an outfit must list at least one garment")
+            return tuple(self.input_path(item, where, "garment") for item in value)
+        return self.input_path(value, where, "garment")
+
     def body(self, value, where: str) -> Body:
         if isinstance(value, str):
             value = {"name": value}
@@ -190,7 +198,7 @@ def sim_job(garment: str, motion: str, body: Body, material: str | None, seams: 
             settings[name] = value
         elif where == "job":
             options[name] = value
-    return SimJob(garment, motion, SimSettings(**settings), body=body.file, betas=list(body.betas) if body.betas else None,
+    return SimJob(list(garment) if isinstance(garment, tuple) else garment, motion, SimSettings(**settings), body=body.file, betas=list(body.betas) if body.betas else None,
                   material=material, seams=seams.settings,
                   output=f"{JOB_FOLDER}/sim.{form}" if form.startswith("usd") else f"{JOB_FOLDER}/frames",
                   format=form if form in ("obj", "ply") else "obj", stats=f"{JOB_FOLDER}/stats.json",
@@ -214,7 +222,7 @@ def _job(garment: str, motion: str, body: Body, material: str | None, seams: Sea
         checker.fail(where, exc.problem)
     request = job.to_dict()
     digest = hashlib.sha1(json.dumps(request, sort_keys=True).encode()).hexdigest()[:6]
-    parts = [_stem(garment), _stem(motion), body.name] + ([material] if material else []) + (
+    parts = ["+".join(_stem(g) for g in garment) if isinstance(garment, tuple) else _stem(garment), _stem(motion), body.name] + ([material] if material else []) + (
         [seams.name] if seams.settings else [])
     inputs = {"garment": garment, "motion": motion, "body": body.name, "betas": list(body.betas or ()),
               "body_file": body.file, "material": material or "own", "seams": seams.name,
@@ -235,7 +243,7 @@ def load_jobs(path: str | os.PathLike) -> list[Job]:
         for key in ("garments", "motions"):
             if key not in sweep:
                 check.fail("sweep", f"needs '{key}'")
-        garments = [check.input_path(g, "sweep.garments", "garment") for g in check.items(sweep["garments"], "sweep.garments")]
+        garments = [check.garment(g, "sweep.garments") for g in check.items(sweep["garments"], "sweep.garments")]
         motions = [check.input_path(m, "sweep.motions", "motion") for m in check.items(sweep["motions"], "sweep.motions")]
         bodies = [check.body(b, "sweep.bodies") for b in check.items(sweep.get("bodies", ["mean"]), "sweep.bodies")]
         materials = [None if m == "own" else check.text(m, "sweep.materials")
@@ -253,7 +261,7 @@ def load_jobs(path: str | os.PathLike) -> list[Job]:
             if key not in entry:
                 check.fail(where, f"needs '{key}'")
         seams = check.seams(entry.get("seams", []), f"{where}.seams")
-        jobs.append(_job(check.input_path(entry["garment"], f"{where}.garment", "garment"),
+        jobs.append(_job(check.garment(entry["garment"], f"{where}.garment"),
                          check.input_path(entry["motion"], f"{where}.motion", "motion"),
                          check.body(entry.get("body", "mean"), f"{where}.body"),
                          None if entry.get("material", "own") == "own" else check.text(entry["material"], f"{where}.material"),
