@@ -392,12 +392,52 @@ def resolve_edge_contacts(edges: wp.array2d(dtype=wp.int32), partner: wp.array(d
 
 
 @wp.kernel
-def apply_averaged(delta: wp.array(dtype=wp.vec3), hits: wp.array(dtype=float), x: wp.array(dtype=wp.vec3)):
+def apply_averaged(delta: wp.array(dtype=wp.vec3), hits: wp.array(dtype=float), x: wp.array(dtype=wp.vec3),
+                   pushed: wp.array(dtype=float)):
     """x_i += delta_i / hits_i: each particle moves by the mean of its contact corrections (Jacobi
-    with averaging, so that a triangle many particles lean on is not pushed once per particle)."""
+    with averaging, so that a triangle many particles lean on is not pushed once per particle); how
+    far adds up in ``pushed`` (for friction)."""
     i = wp.tid()
     if hits[i] > 0.0:
-        x[i] = x[i] + delta[i] / hits[i]
+        move = delta[i] / hits[i]
+        x[i] = x[i] + move
+        pushed[i] = pushed[i] + wp.length(move)
+
+
+@wp.kernel
+def self_friction(faces: wp.array2d(dtype=wp.int32), contact_face: wp.array(dtype=wp.int32),
+                  contact_bary: wp.array(dtype=wp.vec3), pushed: wp.array(dtype=float), friction: float,
+                  layer: wp.array(dtype=wp.int32), x_start: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3)):
+    """Coulomb friction between a particle and its contact triangle on another layer (garment) of
+    an outfit (Macklin et al. 2014; a garment's own folds slide freely, as they always have): the
+    particle's motion over the substep relative to its triangle point q = sum_k b_k x_k, in the
+    triangle's plane, is taken away up to ``friction`` times how far contacts pushed it apart (all
+    of it below that: sticking), half from the particle and half from the triangle's corners by
+    their barycentric weights."""
+    i = wp.tid()
+    face = contact_face[i]
+    if face < 0 or pushed[i] <= 0.0:
+        return
+    a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
+    if layer[a] == layer[i]:
+        return
+    w = contact_bary[i]
+    n = wp.cross(x[b] - x[a], x[c] - x[a])
+    size = wp.length(n)
+    if size < 1.0e-12:
+        return
+    n = n / size
+    q_move = w[0] * (x[a] - x_start[a]) + w[1] * (x[b] - x_start[b]) + w[2] * (x[c] - x_start[c])
+    relative = (x[i] - x_start[i]) - q_move
+    tangent = relative - wp.dot(relative, n) * n
+    length = wp.length(tangent)
+    if length < 1.0e-12:
+        return
+    cut = wp.min(length, friction * pushed[i]) / length * tangent
+    wp.atomic_sub(x, i, 0.5 * cut)
+    wp.atomic_add(x, a, 0.5 * w[0] * cut)
+    wp.atomic_add(x, b, 0.5 * w[1] * cut)
+    wp.atomic_add(x, c, 0.5 * w[2] * cut)
 
 
 @wp.func
@@ -460,7 +500,7 @@ class SelfContact:
     """The garment's self-contact state on the device; positions are the solver's particle array."""
 
     def __init__(self, x, rest: np.ndarray, faces: np.ndarray, edges: np.ndarray, separation: float,
-                 exclusion: float, device: str):
+                 exclusion: float, device: str, layer: np.ndarray | None = None):
         self.x, self.device, self.count = x, device, x.shape[0]
         self.launch = Launcher(device)
         self.separation, self.exclusion = float(separation), float(exclusion)
@@ -486,6 +526,11 @@ class SelfContact:
         self._delta = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self._hits = wp.zeros(self.count, dtype=float, device=device)
         self._crossing = wp.zeros(self.edges.shape[0], dtype=wp.int32, device=device)
+        self.pushed = wp.zeros(self.count, dtype=float, device=device)  # m pushed apart this substep
+        self.friction_coefficient = 0.0  # Coulomb friction between layers (the solver sets the material's)
+        self.layer = wp.array(np.zeros(self.count, np.int32) if layer is None else np.asarray(layer, np.int32),
+                              dtype=wp.int32, device=device)  # each particle's garment in an outfit
+        self.layered = layer is not None and len(np.unique(layer)) > 1
 
     def search(self, x_start, v, reach: float, lookahead: float, max_speed: float,
                broad: tuple[float, float, float] | None = None) -> None:
@@ -527,7 +572,15 @@ class SelfContact:
             self.launch(resolve_edge_contacts, self.edges.shape[0],
                         [self.edges, self.partner, self.partner_st, self.partner_side, inverse_mass, body_push,
                          self.separation, self.reach, self.x, self._delta, self._hits])
-        self.launch(apply_averaged, self.count, [self._delta, self._hits, self.x])
+        self.launch(apply_averaged, self.count, [self._delta, self._hits, self.x, self.pushed])
+
+    def friction(self, x_start) -> None:
+        """Coulomb friction for the substep's self-contact pushes between layers (``self_friction``),
+        then forget them."""
+        if self.friction_coefficient > 0.0 and self.layered:
+            self.launch(self_friction, self.count, [self.faces, self.face, self.bary, self.pushed,
+                                                    self.friction_coefficient, self.layer, x_start, self.x])
+        self.pushed.zero_()
 
     def crossing_edges(self) -> np.ndarray:
         """Mask [E] of the garment edges that pass through a garment triangle right now."""

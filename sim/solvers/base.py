@@ -73,7 +73,8 @@ class Solver:
         self.self_contact = SelfContact(
             state.x, exclusion_rest(model), model.faces, model.edges, SELF_SEPARATION * thickness,
             max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * thickness + settings.self_contact_reach),
-            device)
+            device, model.layer)
+        self.self_contact.friction_coefficient = float(model.material["friction"])
         self.damping = float(np.exp(-settings.damping / (settings.fps * settings.substeps)))  # per substep
 
     def step(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float, time: float,
@@ -117,6 +118,9 @@ class Solver:
         collider.resolve(state.x)
 
     def finish(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float) -> None:
-        """Friction for the substep's contact pushes, then v = (x_out - x_in) / dt."""
+        """Friction for the substep's contact pushes (the garment's own layers, then the body), then
+        v = (x_out - x_in) / dt."""
+        if self.settings.self_contact:
+            self.self_contact.friction(state_in.x)
         collider.friction(state_out.x, state_in.x, dt)
         self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
