@@ -65,6 +65,12 @@ class BodyCollider:
         self.speed = settings.max_body_speed
         self.time = 0.0  # s since the run started, at the start of the current frame
 
+    def set_offset(self, offset: np.ndarray) -> None:
+        """Each particle's offset off the body beyond the thickness (m) from now on."""
+        self.offset_host = np.asarray(offset, np.float64)
+        self.offset.assign(self.offset_host.astype(np.float32))
+        self.max_offset = float(self.offset_host.max(initial=0.0))
+
     def begin_frame(self, body_next: np.ndarray) -> None:
         """The body will move from where it is now to ``body_next`` [V,3] during the next frame; the
         search reach covers what its fastest vertex travels between searches."""

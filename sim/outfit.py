@@ -29,6 +29,8 @@ from sim.model import ClothModel, cloth_model, dihedral_angles
 COVER = 0.03
 #: thicknesses between two layers where they overlap, at the start
 LAYER_GAP = 2.0
+#: metres an outer particle is lifted at most (over a flared skirt a top's hem goes out 6-7 cm)
+MAX_LIFT = 0.1
 #: edge rings over which a lift fades out
 LIFT_RINGS = 6
 #: thicknesses a particle keeps off the body beyond its own, per inner garment it covers at rest
@@ -105,29 +107,41 @@ def _ring_mean(values: np.ndarray, edges: np.ndarray) -> np.ndarray:
 def separate_layers(models: list[ClothModel], body_vertices: np.ndarray,
                     body_faces: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """The lift (m, along the body's normal) of every particle of each model, inner first, so that
-    where an outer garment covers an inner one it starts ``LAYER_GAP`` thicknesses further from the
-    body (module docstring), and how many inner garments each particle covers; the models' rest
-    shapes are moved by the lift in place."""
+    where an outer garment covers an inner one it starts ``LAYER_GAP`` thicknesses outside it
+    (module docstring), and how many inner garments each particle covers; the models' rest shapes
+    are moved by the lift in place.
+
+    A covered particle p, with q its closest point on an inner garment and n the outward normal
+    there, needs (p + t d - q).n >= LAYER_GAP thickness along the body's normal d: t = (gap - (p -
+    q).n) / max(d.n, 0.3), where p - q crosses the inner surface rather than runs along it (beside
+    an open edge), at most ``MAX_LIFT``; three rounds, the closest points taken again after each."""
     from darts.geometry.distance import SurfaceDistance
 
     body = SurfaceDistance(body_vertices, body_faces)
     thickness = max(float(m.material["thickness"]) for m in models)
+    gap = LAYER_GAP * thickness
     lifts, covers = [np.zeros(len(models[0].rest))], [np.zeros(len(models[0].rest))]
     for k in range(1, len(models)):
         outer = models[k]
         _, closest, _ = body.query(outer.rest, winding=False)
         away = outer.rest - closest
-        height = np.linalg.norm(away, axis=1)
-        direction = away / np.maximum(height, 1e-9)[:, None]
-        need, count = np.zeros(len(outer.rest)), np.zeros(len(outer.rest))
-        for inner in models[:k]:
-            gap, at, _ = SurfaceDistance(inner.rest, inner.faces).query(outer.rest, max_dist=COVER, winding=False)
-            covered = np.abs(gap) < 0.99 * COVER  # the query answers max_dist (in float32) where nothing is near
-            count += covered
-            if covered.any():
-                inner_height, _, _ = body.query(at[covered], winding=False)
-                need[covered] = np.maximum(need[covered], np.abs(inner_height) + LAYER_GAP * thickness - height[covered])
-        lift = np.maximum(need, 0.0)
+        direction = away / np.maximum(np.linalg.norm(away, axis=1), 1e-9)[:, None]
+        inner_surfaces = [SurfaceDistance(inner.rest, inner.faces) for inner in models[:k]]
+        lift, count = np.zeros(len(outer.rest)), np.zeros(len(outer.rest))
+        for round_ in range(3):
+            for surface in inner_surfaces:
+                points = outer.rest + lift[:, None] * direction
+                distance, at, normal = surface.query(points, max_dist=COVER, winding=False)
+                covered = np.abs(distance) < 0.99 * COVER  # the query answers max_dist (in float32) where nothing is near
+                if round_ == 0:
+                    count += covered
+                side = np.einsum("ij,ij->i", points - at, normal)
+                # over or under the inner surface, not beside its open edge (there p - q runs along it)
+                across = np.abs(side) >= 0.5 * np.linalg.norm(points - at, axis=1)
+                short = covered & across & (side < gap)
+                facing = np.maximum(np.einsum("ij,ij->i", direction, normal), 0.3)
+                lift[short] += (gap - side[short]) / facing[short]
+        lift = np.minimum(lift, MAX_LIFT)
         for _ in range(LIFT_RINGS):
             lift = np.maximum(lift, 0.7 * _ring_mean(lift, outer.edges))
         outer.rest[:] = outer.rest + lift[:, None] * direction
@@ -164,16 +178,54 @@ def _remeasured(model: ClothModel) -> ClothModel:
                    hinge_rest_angle=dihedral_angles(model.rest, model.hinges))
 
 
+def closed_surface(outfit: Outfit, particles: np.ndarray, layer: int) -> tuple[np.ndarray, np.ndarray]:
+    """Garment ``layer``'s surface with its openings closed: points [P + L, 3] (the particles, then
+    one centre per feature-line loop) and faces: the garment's and a fan from each loop to its
+    centre, facing away from the garment's centroid (every opening of a template is a feature line:
+    waist, hems, cuffs or armholes, neckline)."""
+    model = outfit.model
+    faces = [model.faces[model.layer[model.faces[:, 0]] == layer]]
+    centroid = particles[outfit.particle_slices[layer]].mean(axis=0)
+    loops = [loop for name, loop in model.loops.items() if name.split("/")[0] == outfit.names[layer]]
+    centres = []
+    for index, loop in enumerate(loops):
+        centre = particles[loop].mean(axis=0)
+        fan = np.stack([loop, np.roll(loop, -1), np.full(len(loop), len(particles) + index)], axis=1)
+        a, b = particles[fan[:, 0]], particles[fan[:, 1]]
+        if np.dot(np.cross(a - centre, b - centre).sum(axis=0), centre - centroid) < 0:
+            fan = fan[:, [1, 0, 2]]
+        faces.append(fan)
+        centres.append(centre)
+    return np.concatenate([particles, np.reshape(centres, (-1, 3))]), np.concatenate(faces)
+
+
 def layer_order(outfit: Outfit, particles: np.ndarray) -> dict[str, float]:
     """For each pair of garments (inner, outer): the fraction of the outer garment's particles inside
-    the inner one by its generalized winding number (> 1/2: Jacobson et al. 2013; the garments are
-    open surfaces, oriented away from the body), keyed ``"outer in inner"``."""
+    the inner one, by the winding number (> 1/2) of the inner garment with its openings closed
+    (``closed_surface``; open, a sleeve passing an armhole would count as inside it), keyed ``"outer
+    in inner"``."""
     from darts.geometry.distance import SurfaceDistance
 
-    model, found = outfit.model, {}
+    found = {}
     for j in range(len(outfit.names) - 1):
-        surface = SurfaceDistance(particles, model.faces[model.layer[model.faces[:, 0]] == j])
+        surface = SurfaceDistance(*closed_surface(outfit, particles, j))
         for k in range(j + 1, len(outfit.names)):
             sign, _, _ = surface.query(particles[outfit.particle_slices[k]], winding=True)
             found[f"{outfit.names[k]} in {outfit.names[j]}"] = float(np.mean(sign < 0))
     return found
+
+
+def covering_offsets(outfit: Outfit, particles: np.ndarray) -> np.ndarray:
+    """``body_offset`` [P] (m) for the particles where they are now: one ``LAYER_OFFSET`` thickness
+    per inner garment whose surface is within ``COVER`` of the particle."""
+    from darts.geometry.distance import SurfaceDistance
+
+    model = outfit.model
+    thickness = float(model.material["thickness"])
+    offset = np.zeros(len(particles))
+    for j in range(len(outfit.names) - 1):
+        surface = SurfaceDistance(particles, model.faces[model.layer[model.faces[:, 0]] == j])
+        outer = np.flatnonzero(model.layer > j)
+        gap, _, _ = surface.query(particles[outer], max_dist=COVER, winding=False)
+        offset[outer[np.abs(gap) < 0.99 * COVER]] += LAYER_OFFSET * thickness
+    return offset

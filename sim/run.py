@@ -17,7 +17,7 @@ import numpy as np
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
 from sim.model import ClothModel, cloth_model
-from sim.outfit import Outfit, layer_order
+from sim.outfit import Outfit, covering_offsets, layer_order
 from sim.quality import edge_strain, strain_summary, waist_height
 from sim.settings import SimSettings
 from sim.simulation import Simulation
@@ -78,6 +78,8 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
     bar = tqdm(total=total - 1, unit="frame", desc="simulating", disable=not progress, leave=False)
     for k in range(total):
         if k > 0:
+            if outfit is not None:  # the layers' offsets off the body, where the garments are now
+                solver.collider.set_offset(covering_offsets(outfit, solver.positions()))
             solver.step_frame(track.vertices[k])
             result.simulated_frames += 1
             bar.update(1)
