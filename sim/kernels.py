@@ -433,3 +433,18 @@ def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, winding: int, x: wp
             wp.atomic_add(inside, 2, 1)
     wp.atomic_max(max_speed, 0, wp.length(vi))
 
+
+
+@wp.kernel
+def edges_through_mesh(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32),
+                       hits: wp.array(dtype=wp.int32)):
+    """hits[e] = 1 where edge e (particles ``edges[e]`` at ``x``) passes through a triangle of ``mesh``."""
+    e = wp.tid()
+    a = x[edges[e, 0]]
+    d = x[edges[e, 1]] - a
+    length = wp.length(d)
+    if length < 1.0e-9:
+        return
+    query = wp.mesh_query_ray(mesh, a, d / length, length)
+    if query.result:
+        hits[e] = 1

@@ -229,3 +229,29 @@ def covering_offsets(outfit: Outfit, particles: np.ndarray) -> np.ndarray:
         gap, _, _ = surface.query(particles[outer], max_dist=COVER, winding=False)
         offset[outer[np.abs(gap) < 0.99 * COVER]] += LAYER_OFFSET * thickness
     return offset
+
+
+def layer_crossings(outfit: Outfit, particles: np.ndarray) -> dict[str, int]:
+    """For each pair of garments: how many edges of either pass through a triangle of the other
+    right now (``kernels.edges_through_mesh``), keyed ``"outer x inner"``. A garment's crossings
+    with itself are counted with the rest in ``FrameMeasure.self_intersections``."""
+    from darts.geometry.warp_runtime import warp
+    from sim import kernels
+
+    wp = warp()
+    model = outfit.model
+    points = wp.array(np.ascontiguousarray(particles, np.float32), dtype=wp.vec3)
+    edge_layer, face_layer = model.layer[model.edges[:, 0]], model.layer[model.faces[:, 0]]
+    found = {}
+    for j in range(len(outfit.names) - 1):
+        for k in range(j + 1, len(outfit.names)):
+            total = 0
+            for edges_of, faces_of in ((k, j), (j, k)):
+                faces = np.ascontiguousarray(model.faces[face_layer == faces_of], np.int32).reshape(-1)
+                mesh = wp.Mesh(points=points, indices=wp.array(faces, dtype=wp.int32))
+                edges = wp.array(np.ascontiguousarray(model.edges[edge_layer == edges_of], np.int32), dtype=wp.int32)
+                hits = wp.zeros(edges.shape[0], dtype=wp.int32)
+                wp.launch(kernels.edges_through_mesh, dim=edges.shape[0], inputs=[mesh.id, points, edges, hits])
+                total += int(hits.numpy().sum())
+            found[f"{outfit.names[k]} x {outfit.names[j]}"] = total
+    return found

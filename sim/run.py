@@ -17,7 +17,7 @@ import numpy as np
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
 from sim.model import ClothModel, cloth_model
-from sim.outfit import Outfit, covering_offsets, layer_order
+from sim.outfit import Outfit, covering_offsets, layer_crossings, layer_order
 from sim.quality import edge_strain, strain_summary, waist_height
 from sim.settings import SimSettings
 from sim.simulation import Simulation
@@ -110,7 +110,8 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
             waists = [g["waist_height"] for g in each.values() if g["waist_height"] is not None]
             frame.update(waist_height=waists[0] if waists else None, garments=each,
                          seam_gap={f"{name}/{seam}": gap for name, g in each.items() for seam, gap in g["seam_gap"].items()},
-                         layers=layer_order(outfit, particles) if winding else None)
+                         layers=layer_order(outfit, particles) if winding else None,
+                         layer_crossings=layer_crossings(outfit, particles))
         waist = frame["waist_height"]
         if waist is not None:
             settled = waist if not result.frames else result.frames[0]["waist_height"]
@@ -166,4 +167,5 @@ def _outfit_summary(frames: list[dict]) -> dict:
                                                 default=0.0)}
                      for name in names},
         "max_layer_inside": None if layers is None else {pair: max(f["layers"][pair] for f in frames) for pair in layers},
+        "max_layer_crossings": {pair: max(f["layer_crossings"][pair] for f in frames) for pair in frames[0]["layer_crossings"]},
     }

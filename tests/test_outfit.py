@@ -9,7 +9,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from darts.errors import DartsInputError
-from sim.outfit import LAYER_GAP, outfit_model
+from sim.outfit import LAYER_GAP, layer_crossings, outfit_model
 from sim.self_contact import SelfContact
 from sim.settings import SimSettings
 from sim.simulation import Simulation
@@ -106,6 +106,7 @@ def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, t
     stats = json.loads(stats_path.read_text())
     assert stats["garments"].keys() == {"long_pants", "long_sleeve_top"} and stats["vertices"] > len(top)
     assert 0.0 <= stats["max_layer_inside"]["long_sleeve_top in long_pants"] <= 0.05
+    assert 0 <= stats["max_layer_crossings"]["long_sleeve_top x long_pants"] <= stats["max_self_intersections"]
     assert stats["max_penetration"] <= 0.01 and stats["stable"]
     assert "long_pants/waistband" in stats["max_seam_gap"] and "long_sleeve_top/left_side" in stats["max_seam_gap"]
     assert stats["frames"][0]["garments"]["long_pants"]["waist_height"] is not None
@@ -169,3 +170,14 @@ def test_layers_hold_each_other_by_friction():
     held = _slide(friction=True)
     slid = _slide(friction=False)
     assert held < 0.055 and slid > 0.10 and slid > 2.5 * held, (held, slid)
+
+
+def test_edges_through_the_other_garment_are_counted():
+    outfit = outfit_model([_sheet(0.0), _sheet(0.02)], ["inner", "outer"], *SLAB)
+    apart = outfit.model.rest
+    assert layer_crossings(outfit, apart) == {"outer x inner": 0}
+    through = apart.copy()
+    outer = outfit.particle_slices[1]
+    corner = (through[outer, 0] > 0.05) & (through[outer, 1] > 0.05)
+    through[np.flatnonzero(corner) + outer.start, 2] = -0.01  # a corner of the outer sheet pushed through
+    assert layer_crossings(outfit, through)["outer x inner"] > 0
