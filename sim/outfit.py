@@ -9,9 +9,9 @@ Thickness and friction are one per model: the outfit takes the largest of its ga
 
 Templates are all cut at the same ease from the body, so an outer garment lies on the inner one
 where they overlap. ``separate_layers`` starts them apart: each outer particle within
-``COVER`` of an inner garment is lifted along the body's normal until it is ``LAYER_GAP`` further
-from the body than the inner garment there, and the lift is spread a few edge rings so that it
-fades instead of stepping. The lifted shape is the outer garment's rest shape too (an outer garment
+``COVER`` of an inner garment is lifted along the body's normal until it is ``LAYER_GAP``
+thicknesses outside the inner surface, and the lift is spread a few edge rings so that it fades
+instead of stepping. The lifted shape is the outer garment's rest shape too (an outer garment
 is cut larger where it covers another), so the drape starts without intersections and without
 stretch. Everything here is in the body's canonical frame (Y up, metres).
 """
@@ -33,7 +33,7 @@ LAYER_GAP = 2.0
 MAX_LIFT = 0.1
 #: edge rings over which a lift fades out
 LIFT_RINGS = 6
-#: thicknesses a particle keeps off the body beyond its own, per inner garment it covers at rest
+#: thicknesses a particle keeps off the body beyond its own, per inner garment within ``COVER`` of it
 LAYER_OFFSET = 1.0
 
 
@@ -104,12 +104,10 @@ def _ring_mean(values: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return np.where(count > 0, total / np.maximum(count, 1.0), values)
 
 
-def separate_layers(models: list[ClothModel], body_vertices: np.ndarray,
-                    body_faces: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def separate_layers(models: list[ClothModel], body_vertices: np.ndarray, body_faces: np.ndarray) -> list[np.ndarray]:
     """The lift (m, along the body's normal) of every particle of each model, inner first, so that
     where an outer garment covers an inner one it starts ``LAYER_GAP`` thicknesses outside it
-    (module docstring), and how many inner garments each particle covers; the models' rest shapes
-    are moved by the lift in place.
+    (module docstring); the models' rest shapes are moved by the lift in place.
 
     A covered particle p, with q its closest point on an inner garment and n the outward normal
     there, needs (p + t d - q).n >= LAYER_GAP thickness along the body's normal d: t = (gap - (p -
@@ -120,21 +118,19 @@ def separate_layers(models: list[ClothModel], body_vertices: np.ndarray,
     body = SurfaceDistance(body_vertices, body_faces)
     thickness = max(float(m.material["thickness"]) for m in models)
     gap = LAYER_GAP * thickness
-    lifts, covers = [np.zeros(len(models[0].rest))], [np.zeros(len(models[0].rest))]
+    lifts = [np.zeros(len(models[0].rest))]
     for k in range(1, len(models)):
         outer = models[k]
         _, closest, _ = body.query(outer.rest, winding=False)
         away = outer.rest - closest
         direction = away / np.maximum(np.linalg.norm(away, axis=1), 1e-9)[:, None]
         inner_surfaces = [SurfaceDistance(inner.rest, inner.faces) for inner in models[:k]]
-        lift, count = np.zeros(len(outer.rest)), np.zeros(len(outer.rest))
-        for round_ in range(3):
+        lift = np.zeros(len(outer.rest))
+        for _ in range(3):
             for surface in inner_surfaces:
                 points = outer.rest + lift[:, None] * direction
                 distance, at, normal = surface.query(points, max_dist=COVER, winding=False)
                 covered = np.abs(distance) < 0.99 * COVER  # the query answers max_dist (in float32) where nothing is near
-                if round_ == 0:
-                    count += covered
                 side = np.einsum("ij,ij->i", points - at, normal)
                 # over or under the inner surface, not beside its open edge (there p - q runs along it)
                 across = np.abs(side) >= 0.5 * np.linalg.norm(points - at, axis=1)
@@ -146,13 +142,13 @@ def separate_layers(models: list[ClothModel], body_vertices: np.ndarray,
             lift = np.maximum(lift, 0.7 * _ring_mean(lift, outer.edges))
         outer.rest[:] = outer.rest + lift[:, None] * direction
         lifts.append(lift)
-        covers.append(count)
-    return lifts, covers
+    return lifts
 
 
 def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray, body_faces: np.ndarray) -> Outfit:
     """``darts`` (inner first) as one model on the body at rest (canonical frame): the garments'
-    models joined after ``separate_layers``; rest lengths and angles of lifted garments re-measured."""
+    models joined after ``separate_layers``; rest lengths and angles of lifted garments re-measured,
+    and the layers' offsets off the body (``covering_offsets``) found on the rest shape."""
     if len({d.body_model for d in darts}) > 1:
         raise DartsInputError(None, "the garments of an outfit must be made for the same body "
                                     f"(found {', '.join(sorted({d.body_model for d in darts}))})")
@@ -160,16 +156,16 @@ def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray
         raise DartsInputError(None, "the garments of an outfit must be made for the same body shape (betas)")
     names = garment_names(labels)
     models = [cloth_model(dart) for dart in darts]
-    lifts, covers = separate_layers(models, body_vertices, body_faces)
-    thickness = max(float(m.material["thickness"]) for m in models)
-    models = [replace(m, body_offset=LAYER_OFFSET * thickness * c) for m, c in zip(models, covers)]
+    lifts = separate_layers(models, body_vertices, body_faces)
     models = [_remeasured(m) if lift.any() else m for m, lift in zip(models, lifts)]
     vertex_edges = np.cumsum([0] + [len(d.vertices) for d in darts])
     particle_edges = np.cumsum([0] + [len(m.rest) for m in models])
-    return Outfit(darts=list(darts), names=names, model=_join(models, names),
-                  vertex_slices=[slice(a, b) for a, b in zip(vertex_edges[:-1], vertex_edges[1:])],
-                  particle_slices=[slice(a, b) for a, b in zip(particle_edges[:-1], particle_edges[1:])],
-                  lift=np.concatenate(lifts))
+    outfit = Outfit(darts=list(darts), names=names, model=_join(models, names),
+                    vertex_slices=[slice(a, b) for a, b in zip(vertex_edges[:-1], vertex_edges[1:])],
+                    particle_slices=[slice(a, b) for a, b in zip(particle_edges[:-1], particle_edges[1:])],
+                    lift=np.concatenate(lifts))
+    outfit.model.body_offset = covering_offsets(outfit, outfit.model.rest)
+    return outfit
 
 
 def _remeasured(model: ClothModel) -> ClothModel:

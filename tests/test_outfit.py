@@ -11,6 +11,7 @@ from scipy.spatial import cKDTree
 from darts.errors import DartsInputError
 from sim.outfit import LAYER_GAP, layer_crossings, outfit_model
 from sim.self_contact import SelfContact
+from sim.solvers.base import exclusion_rest
 from sim.settings import SimSettings
 from sim.simulation import Simulation
 from tests.helpers import sheet_dart
@@ -48,8 +49,8 @@ def _drop(inner_height: float, outer_height: float, frames: int = 30, one_layer:
         model.body_offset[:] = 0.0
     body_vertices, body_faces = SLAB
     solver = Simulation(model, model.rest, body_faces, body_vertices, SimSettings(ground=False))
-    checker = SelfContact(solver.x, model.rest + model.layer[:, None] * np.array([10.0, 0, 0]), model.faces,
-                          model.edges, 0.0, solver.self_contact.exclusion, "cpu")
+    checker = SelfContact(solver.x, exclusion_rest(model), model.faces, model.edges, 0.0,
+                          solver.self_contact.exclusion, "cpu")
     crossings = []
     for _ in range(frames):
         solver.step_frame(body_vertices)
