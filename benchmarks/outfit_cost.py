@@ -52,7 +52,7 @@ def measure(garments: list[str], frames: int) -> dict:
             if k > 1:  # the first frame compiles the kernels
                 cpu[name] += time.process_time() - start
     alone = sum(cpu[name] for name in garments)
-    inside = layer_order(outfit, sims["outfit"].positions())
+    inside, _ = layer_order(outfit, sims["outfit"].positions(), track.vertices[k], track.faces)
     return {"garments": garments, "frames": k - 1, "particles": {n: len(m.rest) for n, m in models.items()},
             "cpu_s": cpu, "ratio_outfit_to_sum_alone": cpu["outfit"] / alone, "layer_inside_last_frame": inside,
             "stable": all(s.measure().finite for s in sims.values())}

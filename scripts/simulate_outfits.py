@@ -42,7 +42,7 @@ def run_one(job: tuple[str, str, str]) -> dict:
     s = run.stats
     row = {"outfit": name, "garments": OUTFITS[name], "motion": motion, "stable": s["stable"], "message": s["message"],
            "frames": len(s["frames"]), "particles": s["particles"], "sim_fps": s["sim_fps"],
-           "max_layer_inside": s.get("max_layer_inside"), "max_layer_crossings": s.get("max_layer_crossings"), "max_penetration": s["max_penetration"],
+           "max_layer_inside": s.get("max_layer_inside"), "max_layer_inside_closed": s.get("max_layer_inside_closed"), "max_layer_crossings": s.get("max_layer_crossings"), "max_penetration": s["max_penetration"],
            "max_penetration_winding": s["max_penetration_winding"], "max_crossings": s["max_self_intersections"],
            "garment_stats": s.get("garments"), "max_waist_slide": s["max_waist_slide"]}
     out.write_text(json.dumps(row, indent=1))
@@ -50,11 +50,13 @@ def run_one(job: tuple[str, str, str]) -> dict:
 
 
 def table(rows: list[dict]) -> str:
-    lines = ["| outfit (inner first) | motion | stable | outer inside inner (max) | body penetration (max, winding) "
-             "| crossing edges (max: all, between the garments) | max strain per garment | sim fps |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| outfit (inner first) | motion | stable | outer under inner's cloth (max) | outer inside inner closed (max) "
+             "| body penetration (max, winding) | crossing edges (max: all, between the garments) | max strain per garment "
+             "| sim fps |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        inside = ", ".join(f"{100 * v:.2f} %" for v in (r["max_layer_inside"] or {}).values())
+        inside = " | ".join(", ".join(f"{100 * v:.2f} %" for v in (r[key] or {}).values())
+                            for key in ("max_layer_inside", "max_layer_inside_closed"))
         strain = ", ".join(f"{k} {100 * v['strain_max']:.0f} %" for k, v in (r["garment_stats"] or {}).items())
         lines.append(f"| {' + '.join(r['garments'])} | {r['motion']} | {'yes' if r['stable'] else 'no'} | {inside} | "
                      f"{100 * r['max_penetration']:.2f} %, {100 * (r['max_penetration_winding'] or 0):.2f} % | "

@@ -49,6 +49,7 @@ class Outfit:
     vertex_slices: list[slice]
     particle_slices: list[slice]
     lift: np.ndarray
+    caps: np.ndarray  # [C,3] particle triangles closing the inner garments' openings (``opening_caps``)
 
     def split(self, vertices: np.ndarray) -> list[np.ndarray]:
         """The outfit's vertices [V,3] as one array per garment."""
@@ -163,8 +164,9 @@ def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray
     outfit = Outfit(darts=list(darts), names=names, model=_join(models, names),
                     vertex_slices=[slice(a, b) for a, b in zip(vertex_edges[:-1], vertex_edges[1:])],
                     particle_slices=[slice(a, b) for a, b in zip(particle_edges[:-1], particle_edges[1:])],
-                    lift=np.concatenate(lifts))
+                    lift=np.concatenate(lifts), caps=np.zeros((0, 3), np.int64))
     outfit.model.body_offset = covering_offsets(outfit, outfit.model.rest)
+    outfit.caps = opening_caps(outfit.model, outfit.model.rest)
     return outfit
 
 
@@ -174,41 +176,97 @@ def _remeasured(model: ClothModel) -> ClothModel:
                    hinge_rest_angle=dihedral_angles(model.rest, model.hinges))
 
 
-def closed_surface(outfit: Outfit, particles: np.ndarray, layer: int) -> tuple[np.ndarray, np.ndarray]:
-    """Garment ``layer``'s surface with its openings closed: points [P + L, 3] (the particles, then
-    one centre per feature-line loop) and faces: the garment's and a fan from each loop to its
-    centre, facing away from the garment's centroid (every opening of a template is a feature line:
-    waist, hems, cuffs or armholes, neckline)."""
+def loop_cap(loop: np.ndarray) -> np.ndarray:
+    """Triangles [n-2, 3] closing a loop of n particle indices without a new point: a strip zigzagging
+    between its two ends towards the far side (i, i+1, j), (i+1, j-1, j), ..., each triangle's corners
+    in loop order, so all of them turn the way the loop does."""
+    n = len(loop)
+    i, j, triangles = 0, n - 1, []
+    while j - i >= 2:
+        triangles.append((loop[i], loop[i + 1], loop[j]))
+        i += 1
+        if j - i >= 2:
+            triangles.append((loop[i], loop[j - 1], loop[j]))
+            j -= 1
+    return np.asarray(triangles, np.int64).reshape(-1, 3)
+
+
+def opening_caps(model: ClothModel, particles: np.ndarray) -> np.ndarray:
+    """[C,3]: every feature-line loop of every garment but the outermost closed by ``loop_cap``,
+    facing away from its garment's centroid (``particles`` [P,3] is where the garments are: every
+    opening of a template is a feature line: waist, hems, cuffs or armholes, neckline). With its
+    caps an inner garment is a closed surface (for ``layer_order``'s winding number)."""
+    outermost = model.layer.max()
+    caps = []
+    for loop in model.loops.values():
+        layer = model.layer[loop[0]]
+        if layer == outermost or len(loop) < 3:
+            continue
+        cap = loop_cap(np.asarray(loop))
+        centroid = particles[model.layer == layer].mean(axis=0)
+        a, b, c = (particles[cap[:, k]] for k in range(3))
+        if np.dot(np.cross(b - a, c - a).sum(axis=0), particles[loop].mean(axis=0) - centroid) < 0:
+            cap = cap[:, [0, 2, 1]]
+        caps.append(cap)
+    return np.concatenate(caps) if caps else np.zeros((0, 3), np.int64)
+
+
+def closed_surface(outfit: Outfit, layer: int) -> np.ndarray:
+    """Garment ``layer``'s triangles with its openings closed (``Outfit.caps``), indexing the
+    outfit's particles."""
     model = outfit.model
-    faces = [model.faces[model.layer[model.faces[:, 0]] == layer]]
-    centroid = particles[outfit.particle_slices[layer]].mean(axis=0)
-    loops = [loop for name, loop in model.loops.items() if name.split("/")[0] == outfit.names[layer]]
-    centres = []
-    for index, loop in enumerate(loops):
-        centre = particles[loop].mean(axis=0)
-        fan = np.stack([loop, np.roll(loop, -1), np.full(len(loop), len(particles) + index)], axis=1)
-        a, b = particles[fan[:, 0]], particles[fan[:, 1]]
-        if np.dot(np.cross(a - centre, b - centre).sum(axis=0), centre - centroid) < 0:
-            fan = fan[:, [1, 0, 2]]
-        faces.append(fan)
-        centres.append(centre)
-    return np.concatenate([particles, np.reshape(centres, (-1, 3))]), np.concatenate(faces)
+    faces = np.concatenate([model.faces, outfit.caps])
+    return faces[model.layer[faces[:, 0]] == layer]
 
 
-def layer_order(outfit: Outfit, particles: np.ndarray) -> dict[str, float]:
-    """For each pair of garments (inner, outer): the fraction of the outer garment's particles inside
-    the inner one, by the winding number (> 1/2) of the inner garment with its openings closed
-    (``closed_surface``; open, a sleeve passing an armhole would count as inside it), keyed ``"outer
-    in inner"``."""
+def layer_order(outfit: Outfit, particles: np.ndarray, body_vertices: np.ndarray,
+                body_faces: np.ndarray) -> tuple[dict[str, float], dict[str, float]]:
+    """For each pair of garments (inner, outer), keyed ``"outer in inner"``: the fraction of the outer
+    garment's particles under the inner garment's cloth, and the fraction inside its closed surface.
+
+    Inside: the winding number (> 1/2) of the inner garment closed by its caps (``closed_surface``,
+    the surface the outer garment collides with; open, a sleeve passing an armhole would count as
+    inside it). Under the cloth: inside, and the inner garment's cloth lies over the particle: the
+    segment of ``COVER`` from it along the body's outward normal at its closest body point passes
+    through an inner triangle. A particle inside but not under the cloth lies in an opening that the
+    body fills, on the skin (the top's underarm in a sleeveless dress's armhole, pressed into the
+    armpit by the arm), where a flat cap cannot follow the body."""
     from darts.geometry.distance import SurfaceDistance
 
-    found = {}
+    body = SurfaceDistance(body_vertices, body_faces)
+    model = outfit.model
+    under, inside = {}, {}
     for j in range(len(outfit.names) - 1):
-        surface = SurfaceDistance(*closed_surface(outfit, particles, j))
+        surface = SurfaceDistance(particles, closed_surface(outfit, j))
+        cloth = model.faces[model.layer[model.faces[:, 0]] == j]
         for k in range(j + 1, len(outfit.names)):
-            sign, _, _ = surface.query(particles[outfit.particle_slices[k]], winding=True)
-            found[f"{outfit.names[k]} in {outfit.names[j]}"] = float(np.mean(sign < 0))
-    return found
+            outer = particles[outfit.particle_slices[k]]
+            sign, _, _ = surface.query(outer, winding=True)
+            found = outer[sign < 0]
+            covered = 0
+            if len(found):
+                _, _, normal = body.query(found, winding=False)
+                points = np.concatenate([particles, found, found + COVER * normal])
+                start = len(particles) + np.arange(len(found))
+                covered = int(edges_through(points, cloth, np.stack([start, start + len(found)], 1)).sum())
+            key = f"{outfit.names[k]} in {outfit.names[j]}"
+            under[key], inside[key] = covered / len(outer), len(found) / len(outer)
+    return under, inside
+
+
+def edges_through(points: np.ndarray, faces: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Mask [E]: which segments ``edges`` [E,2] (indices into ``points`` [N,3]) pass through a
+    triangle ``faces`` [F,3] (``kernels.edges_through_mesh``)."""
+    from darts.geometry.warp_runtime import warp
+    from sim import kernels
+
+    wp = warp()
+    x = wp.array(np.ascontiguousarray(points, np.float32), dtype=wp.vec3)
+    mesh = wp.Mesh(points=x, indices=wp.array(np.ascontiguousarray(faces, np.int32).reshape(-1), dtype=wp.int32))
+    segments = wp.array(np.ascontiguousarray(edges, np.int32), dtype=wp.int32)
+    hits = wp.zeros(len(edges), dtype=wp.int32)
+    wp.launch(kernels.edges_through_mesh, dim=len(edges), inputs=[mesh.id, x, segments, hits])
+    return hits.numpy().astype(bool)
 
 
 def covering_offsets(outfit: Outfit, particles: np.ndarray) -> np.ndarray:
@@ -229,25 +287,14 @@ def covering_offsets(outfit: Outfit, particles: np.ndarray) -> np.ndarray:
 
 def layer_crossings(outfit: Outfit, particles: np.ndarray) -> dict[str, int]:
     """For each pair of garments: how many edges of either pass through a triangle of the other
-    right now (``kernels.edges_through_mesh``), keyed ``"outer x inner"``. A garment's crossings
-    with itself are counted with the rest in ``FrameMeasure.self_intersections``."""
-    from darts.geometry.warp_runtime import warp
-    from sim import kernels
-
-    wp = warp()
+    right now (``edges_through``), keyed ``"outer x inner"``. A garment's crossings with itself are
+    counted with the rest in ``FrameMeasure.self_intersections``."""
     model = outfit.model
-    points = wp.array(np.ascontiguousarray(particles, np.float32), dtype=wp.vec3)
     edge_layer, face_layer = model.layer[model.edges[:, 0]], model.layer[model.faces[:, 0]]
     found = {}
     for j in range(len(outfit.names) - 1):
         for k in range(j + 1, len(outfit.names)):
-            total = 0
-            for edges_of, faces_of in ((k, j), (j, k)):
-                faces = np.ascontiguousarray(model.faces[face_layer == faces_of], np.int32).reshape(-1)
-                mesh = wp.Mesh(points=points, indices=wp.array(faces, dtype=wp.int32))
-                edges = wp.array(np.ascontiguousarray(model.edges[edge_layer == edges_of], np.int32), dtype=wp.int32)
-                hits = wp.zeros(edges.shape[0], dtype=wp.int32)
-                wp.launch(kernels.edges_through_mesh, dim=edges.shape[0], inputs=[mesh.id, points, edges, hits])
-                total += int(hits.numpy().sum())
-            found[f"{outfit.names[k]} x {outfit.names[j]}"] = total
+            found[f"{outfit.names[k]} x {outfit.names[j]}"] = sum(
+                int(edges_through(particles, model.faces[face_layer == faces_of], model.edges[edge_layer == edges_of]).sum())
+                for edges_of, faces_of in ((k, j), (j, k)))
     return found

@@ -4,7 +4,8 @@ Frames handed to ``sink`` and measured are the recorded ones (after the settle p
 world frame (Z up, metres). Seam gaps are measured on the DART's own vertices (both ends of every
 pair), penetration on the solver's particles. An outfit (``sim.outfit.Outfit``) runs the same way:
 ``sink`` gets its garments' vertices one after the other, and each frame adds every garment's own
-measures and, with ``winding``, the layer order (``sim.outfit.layer_order``).
+measures and, with ``winding``, the layer order (``sim.outfit.layer_order``: under an inner garment's
+cloth, and inside its closed surface).
 """
 from __future__ import annotations
 
@@ -60,6 +61,13 @@ def _layer_strain(model: ClothModel, strain: np.ndarray, layer: int) -> dict[str
     return strain_summary(strain[model.layer[model.edges[:, 0]] == layer])
 
 
+def _layer_measures(outfit: Outfit, particles: np.ndarray, track: BodyTrack, k: int, winding: bool) -> dict:
+    """An outfit frame's layer order (``layers``: under an inner garment's cloth; ``layers_closed``:
+    inside its closed surface; None without ``winding``) and crossing edges between the garments."""
+    under, inside = layer_order(outfit, particles, track.vertices[k], track.faces) if winding else (None, None)
+    return {"layers": under, "layers_closed": inside, "layer_crossings": layer_crossings(outfit, particles)}
+
+
 def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
              sink: Callable[[np.ndarray, np.ndarray], None] | None = None, progress: bool = False,
              winding: bool = False) -> RunResult:
@@ -110,8 +118,7 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
             waists = [g["waist_height"] for g in each.values() if g["waist_height"] is not None]
             frame.update(waist_height=waists[0] if waists else None, garments=each,
                          seam_gap={f"{name}/{seam}": gap for name, g in each.items() for seam, gap in g["seam_gap"].items()},
-                         layers=layer_order(outfit, particles) if winding else None,
-                         layer_crossings=layer_crossings(outfit, particles))
+                         **_layer_measures(outfit, particles, track, k, winding))
         waist = frame["waist_height"]
         if waist is not None:
             settled = waist if not result.frames else result.frames[0]["waist_height"]
@@ -155,7 +162,8 @@ def summary(result: RunResult, vertices: int) -> dict:
 
 def _outfit_summary(frames: list[dict]) -> dict:
     """An outfit's totals: per garment its strain and largest seam gap, and the largest fraction of
-    each outer garment inside an inner one over the run (None unless measured)."""
+    each outer garment under an inner one's cloth and inside its closed surface over the run (None
+    unless measured)."""
     if not frames or "garments" not in frames[0]:
         return {}
     names = list(frames[0]["garments"])
@@ -167,5 +175,7 @@ def _outfit_summary(frames: list[dict]) -> dict:
                                                 default=0.0)}
                      for name in names},
         "max_layer_inside": None if layers is None else {pair: max(f["layers"][pair] for f in frames) for pair in layers},
+        "max_layer_inside_closed": None if layers is None else {pair: max(f["layers_closed"][pair] for f in frames)
+                                                                for pair in layers},
         "max_layer_crossings": {pair: max(f["layer_crossings"][pair] for f in frames) for pair in frames[0]["layer_crossings"]},
     }

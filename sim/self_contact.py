@@ -164,14 +164,17 @@ def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp
                        x_start: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
                        candidates: wp.array2d(dtype=wp.int32), candidate_count: wp.array(dtype=wp.int32),
                        reach: float, mean_velocity: wp.vec3, other_speed: float, lookahead: float, max_speed: float,
-                       exclusion: float, contact_face: wp.array(dtype=wp.int32), contact_bary: wp.array(dtype=wp.vec3),
-                       contact_side: wp.array(dtype=float)):
+                       exclusion: float, layer: wp.array(dtype=wp.int32), contact_face: wp.array(dtype=wp.int32),
+                       contact_bary: wp.array(dtype=wp.vec3), contact_side: wp.array(dtype=float)):
     """Search: each particle's closest facing triangle (``facing_distance``) within reach_i
     (``reach_of``) among its candidates, or, for a particle without a list, among the BVH's triangles
     whose corners are all farther than ``exclusion`` from it on the rest garment (-1: none); its
-    barycentrics, and the side of its plane the particle must not leave: kept from the last search
-    for the same triangle, else the side it was on at the start of the substep (``x_start``, after
-    the last projection)."""
+    barycentrics, and the side of its plane the particle must not leave. Between two garments of an
+    outfit the side is known: an outer garment's particle stays on the outer side of an inner
+    garment's triangle (its normal side: garments' triangles face away from the body) and an inner
+    one on the inner side of an outer triangle, so a particle that has passed through another layer
+    is pulled back. Within a garment it is kept from the last search for the same triangle, else the
+    side it was on at the start of the substep (``x_start``, after the last projection)."""
     i = wp.tid()
     p = x[i]
     best = int(-1)
@@ -196,7 +199,9 @@ def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp
                 best = face
                 best_distance = distance
                 best_bary = bary
-    if best >= 0 and best != contact_face[i]:
+    if best >= 0 and layer[faces[best, 0]] != layer[i]:
+        contact_side[i] = wp.where(layer[i] > layer[faces[best, 0]], 1.0, -1.0)
+    elif best >= 0 and best != contact_face[i]:
         contact_side[i] = wp.sign(wp.dot(x_start[i] - x_start[faces[best, 0]], face_normal(x_start, faces, best)))
     contact_face[i] = best
     contact_bary[i] = best_bary
@@ -553,7 +558,8 @@ class SelfContact:
                          max_speed, most, self.exclusion, self.candidates, self.candidate_distance, self.candidate_count])
         self.launch(find_self_contacts, self.count,
                     [self.mesh.id, self.faces, self.x, x_start, v, self.rest, self.candidates, self.candidate_count,
-                     reach, mean, other, lookahead, max_speed, self.exclusion, self.face, self.bary, self.side])
+                     reach, mean, other, lookahead, max_speed, self.exclusion, self.layer, self.face, self.bary,
+                     self.side])
         if self.edge_edge:
             self.launch(find_edge_contacts, self.edges.shape[0],
                         [self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,
