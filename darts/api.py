@@ -88,18 +88,20 @@ def template(category: str, body=None, betas: Sequence[float] | None = None, edg
 
 
 def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None, camera=None,
-           solver: str = "local-global", silhouette_weight: float = 1.0, progress: bool = False):
+           solver: str = "local-global", silhouette_weight: float | None = None, progress: bool = False,
+           silhouette: str = "outline"):
     """``garment`` deformed by the CRDL so that its feature lines reach targets: ``lines`` (a
     ``lines.npz`` path, or a dict of line name -> [K,3] loop, canonical frame, metres) or ``edits``
     (``NAME=METRES``: ``hem=0.1`` lengthens the hem 10 cm; names in ``darts.crdl.targets.EDITS``).
     With ``mask`` (a path or [H,W] bool) and ``camera`` (a ``Camera`` or a camera.json) the
-    silhouette term joins. Returns (the deformed ``Dart``, its report: arap_energy, handle_rmse (m),
+    silhouette term ``silhouette`` (``darts.crdl.SILHOUETTE_WEIGHTS``) joins, at ``silhouette_weight``
+    (default: the term's). Returns (the deformed ``Dart``, its report: arap_energy, handle_rmse (m),
     penetration (fraction of vertices inside the body), iterations, wall_seconds)."""
     from darts.camera import Camera
-    from darts.crdl import SOLVERS
+    from darts.crdl import SILHOUETTE_WEIGHTS, SOLVERS
     from darts.crdl.deform import deform_dart, weld_garment
     from darts.crdl.layer import CrdlWeights
-    from darts.crdl.silhouette import Silhouette, read_mask
+    from darts.crdl.silhouette import read_mask, silhouette_term
     from darts.crdl.targets import edit_targets, parse_edit, read_target_lines, target_lines
     from darts.templates.defaults import DEFAULT_EASE
 
@@ -109,17 +111,19 @@ def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None,
         raise DartsInputError(None, "a mask and its camera go together")
     if solver not in SOLVERS:
         raise DartsInputError(None, f"unknown CRDL solver '{solver}' (one of {', '.join(SOLVERS)})")
+    if silhouette not in SILHOUETTE_WEIGHTS:
+        raise DartsInputError(None, f"unknown silhouette term '{silhouette}' (one of {', '.join(SILHOUETTE_WEIGHTS)})")
     dart = load_garment(garment)
     model = load_body(body)
     if model.name != dart.body_model:
         raise DartsInputError(garment if isinstance(garment, (str, os.PathLike)) else None,
                               f"was made for the body '{dart.body_model}', not '{model.name}' (pass that body)")
-    silhouette = None
+    term = None
     if mask is not None:
         camera = camera if isinstance(camera, Camera) else Camera.from_json(camera)
         if not isinstance(mask, np.ndarray):
             mask = read_mask(mask, camera.width, camera.height)
-        silhouette = Silhouette(np.asarray(mask, bool), camera)
+        term = silhouette_term(silhouette, np.asarray(mask, bool), camera)
     if lines is not None:
         names = list(dart.lines)
         targets = (target_lines(lines, dart.category, names) if isinstance(lines, dict)
@@ -129,8 +133,9 @@ def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None,
         welded = weld_garment(dart)
         targets = edit_targets(dart.category, welded.vertices, welded.lines, [parse_edit(text) for text in edits])
         clearance = DEFAULT_EASE
-    weights = CrdlWeights(silhouette=silhouette_weight if silhouette is not None else 0.0)
-    return deform_dart(dart, model, targets, solver, weights, silhouette, clearance=clearance, progress=progress)
+    weight = SILHOUETTE_WEIGHTS[silhouette] if silhouette_weight is None else silhouette_weight
+    weights = CrdlWeights(silhouette=weight if term is not None else 0.0)
+    return deform_dart(dart, model, targets, solver, weights, term, clearance=clearance, progress=progress)
 
 
 def read_picture(image):
@@ -165,18 +170,23 @@ def _picture_mask(mask, picture: np.ndarray):
 
 
 def reconstruct(image, category: str | None = None, camera=None, mask=None, body=None,
-                betas: Sequence[float] | None = None, edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False):
+                betas: Sequence[float] | None = None, edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False,
+                silhouette: str = "outline", silhouette_weight: float | None = None):
     """The DART of the garment in ``image`` (a path or [H,W,3] uint8): classifier (unless
-    ``category``), feature-line regressor, CRDL (with the silhouette term when ``mask`` is given).
+    ``category``), feature-line regressor, CRDL (with the silhouette term ``silhouette``, at
+    ``silhouette_weight`` (default: the term's, ``darts.crdl.SILHOUETTE_WEIGHTS``), when ``mask`` is given).
     ``camera``: a ``Camera`` or camera.json (default: the dataset's camera of the category). Returns
     a ``Reconstruction``: ``.dart`` and ``.report`` (category, probabilities, lines, CRDL numbers,
     seconds per stage)."""
     from darts.camera import Camera
+    from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.regress.pipeline import reconstruct as run
     from darts.templates.categories import CATEGORIES
 
     if category is not None and category not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{category}' (one of {', '.join(CATEGORIES)})")
+    if silhouette not in SILHOUETTE_WEIGHTS:
+        raise DartsInputError(None, f"unknown silhouette term '{silhouette}' (one of {', '.join(SILHOUETTE_WEIGHTS)})")
     if not 0.003 <= edge_length <= 0.1:
         raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
     picture = read_picture(image)
@@ -190,4 +200,4 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     if betas is not None and len(betas) > model.num_betas:
         raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
     return run(picture, model, category, camera, _picture_mask(mask, picture), betas=betas, edge_length=edge_length,
-               progress=progress)
+               progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight)

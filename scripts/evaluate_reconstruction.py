@@ -76,11 +76,9 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
     from darts.camera import Camera
     from darts.dart.build import make_dart
     from darts.dart.io import save_dart
-    from darts.fileio import read_npz
-    from darts.geometry.distance import SurfaceDistance
-    from darts.raycast import cast
-    from darts.regress.data import read_image
+    from darts.fileio import read_image, read_npz
     from darts.regress.pipeline import reconstruct
+    from darts.regress.quality import reconstruction_measures
     from darts.templates.defaults import DATASET_EDGE_LENGTH
     from sim.api import simulate
 
@@ -92,17 +90,9 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
     result = reconstruct(image, body, None, camera, mask, betas=meta["betas"])
     baseline = make_dart(result.report["category"], body, betas=np.asarray(meta["betas"]), edge_length=DATASET_EDGE_LENGTH)
     draped = read_npz(sample / "draped.npz")
-    truth = SurfaceDistance(draped["vertices"], draped["faces"])
-    shaped = body.shaped(np.asarray(meta["betas"]))[0][0].double().numpy()
 
     def measure(dart) -> dict:
-        vertices = np.asarray(dart.vertices, np.float64)
-        to_truth = np.abs(truth.query(vertices, winding=False)[0])
-        from_truth = np.abs(SurfaceDistance(vertices, dart.faces).query(draped["vertices"], winding=False)[0])
-        hits = cast(camera, [(shaped, body.faces), (vertices, dart.faces)], 1).which.reshape(mask.shape)
-        render = hits == 1
-        return {"surface_chamfer_cm": 50 * (to_truth.mean() + from_truth.mean()),
-                "mask_iou": float((render & mask).sum() / max((render | mask).sum(), 1))}
+        return reconstruction_measures(dart, draped, camera, mask, body, meta["betas"])
 
     save_dart(result.dart, folder / "garment.npz")
     outcome = simulate(result.dart, "walk", output=str(folder / "walk.usdc"), frames=30, keep_frames=False)

@@ -13,6 +13,7 @@ from darts.crdl.arap import _rotations_from_covariances, arap_energy, arap_syste
 from darts.crdl.deform import deform_dart, fit_surface, handle_targets, weld_garment
 from darts.crdl.layer import Crdl, CrdlWeights
 from darts.camera import Camera
+from darts.crdl.outline import Outline
 from darts.crdl.silhouette import Silhouette
 from darts.crdl.targets import correspond, edit_targets, loop_frame
 from darts.dart.build import make_dart
@@ -190,6 +191,57 @@ def test_silhouette_term_pulls_the_garment_towards_the_mask(body, coarse_skirt):
     term = Silhouette(mask, camera, garment.faces)
     loss = lambda dart: float(term.loss(torch.as_tensor(weld_garment(dart).vertices)))  # noqa: E731
     assert loss(guided) < loss(plain) - 0.02
+
+
+def _skirt_scene(body, skirt, size: int):
+    """A camera of ``size`` pixels facing the skirt, and the hard mask (one ray per pixel) of the
+    skirt widened 8 cm at the hem: (camera, mask, welded garment)."""
+    from darts.raycast import cast
+
+    garment = weld_garment(skirt)
+    k = size / 64
+    camera = Camera(size, size, 75.0 * k, 75.0 * k, 32.0 * k, 32.0 * k, np.diag([1.0, -1.0, -1.0]), np.array([0.0, -0.5, 1.6]))
+    wider = edit_targets("long-skirt", garment.vertices, garment.lines, [("hem_width", 0.08)])
+    target, _ = deform_dart(skirt, body, wider, clearance=0.006)
+    mask = cast(camera, [(weld_garment(target).vertices, garment.faces)], 1).which.reshape(size, size) == 0
+    return camera, mask, garment
+
+
+def _hard_iou(camera, mask, dart) -> float:
+    from darts.raycast import cast
+
+    welded = weld_garment(dart)
+    render = cast(camera, [(welded.vertices, welded.faces)], 1).which.reshape(mask.shape) == 0
+    return float((render & mask).sum() / (render | mask).sum())
+
+
+def test_outline_term_pulls_the_garment_over_the_mask(body, coarse_skirt):
+    """The outline term against the hard mask of a skirt widened at the hem: the result misses less
+    than 0.6 of what the lines alone miss of it (1 - IoU, by a hard render)."""
+    camera, mask, garment = _skirt_scene(body, coarse_skirt, 64)
+    same = {name: garment.vertices[loop] for name, loop in garment.lines.items()}
+    plain, _ = deform_dart(coarse_skirt, body, same)
+    guided, _ = deform_dart(coarse_skirt, body, same, weights=CrdlWeights(silhouette=20.0), silhouette=Outline(mask, camera))
+    assert 1 - _hard_iou(camera, mask, guided) < 0.6 * (1 - _hard_iou(camera, mask, plain))  # measured 0.036 vs 0.086
+
+
+def test_outline_term_reads_the_same_at_any_size_and_its_gradient_is_right(body, coarse_skirt):
+    """L (in units of the mask's size) of the undeformed skirt against the widened one's mask at
+    64 and 256 pixels agrees within 15 %; dL/dp matches central differences."""
+    values = []
+    for size in (64, 256):
+        camera, mask, garment = _skirt_scene(body, coarse_skirt, size)
+        term = Outline(mask, camera).bind(garment.faces)
+        values.append(float(term.loss(torch.as_tensor(garment.vertices))))
+    assert values[0] > 0.005 and values[1] == pytest.approx(values[0], rel=0.15)
+    p = torch.as_tensor(garment.vertices)
+    _, gradient = term.value_and_gradient(p)
+    direction = torch.zeros_like(p)
+    moving = gradient.norm(dim=1).argsort(descending=True)[:20]
+    direction[moving] = gradient[moving] / gradient[moving].norm()
+    step = 1e-5
+    numeric = (float(term.loss(p + step * direction)) - float(term.loss(p - step * direction))) / (2 * step)
+    assert numeric == pytest.approx(float((gradient * direction).sum()), rel=0.05)
 
 
 def test_darts_deform_cli_writes_a_dart_and_a_report(run_darts, tmp_path, coarse_top):

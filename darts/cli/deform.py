@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 
 from darts.crdl import SOLVERS
+from darts.cli.reconstruct import add_silhouette_options
 from darts.crdl.targets import EDITS
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
@@ -21,7 +22,7 @@ def deform(args) -> int:
     if args.report:
         check_output(args.report)
     deformed, report = api.deform(args.garment, args.lines, args.edit, args.body, args.mask, args.camera, args.solver,
-                                  args.silhouette_weight, progress=True)
+                                  args.silhouette_weight, progress=True, silhouette=args.silhouette)
     api.save_garment(deformed, args.output)
     if args.report:
         with atomic_path(args.report) as tmp:
@@ -47,8 +48,7 @@ def add_parser(groups) -> None:
                              "(hem/sleeve: lengthen > 0, shorten < 0; the others: widen > 0)")
     parser.add_argument("--mask", metavar="MASK.png", help="garment silhouette seen by --camera (white = garment)")
     parser.add_argument("--camera", metavar="CAMERA.json", help="pinhole camera of the mask (see docs/crdl.md)")
-    parser.add_argument("--silhouette-weight", type=float, default=1.0, metavar="W",
-                        help="weight of the silhouette term (default 1)")
+    add_silhouette_options(parser)
     parser.add_argument("--solver", choices=SOLVERS, default="local-global",
                         help="local-global (fast, default) or adam (the paper's optimiser)")
     parser.add_argument("--report", metavar="REPORT.json",

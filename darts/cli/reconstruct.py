@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 
+from darts.crdl import SILHOUETTE_WEIGHTS
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
 from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH
@@ -36,7 +37,7 @@ def reconstruct(args) -> int:
     if args.sim_out:
         check_output(args.sim_out, SIM_SUFFIXES)
     result = api.reconstruct(args.image, args.category, args.camera, args.mask, args.body, args.betas, args.edge_length,
-                             progress=True)
+                             progress=True, silhouette=args.silhouette, silhouette_weight=args.silhouette_weight)
     if args.mask is None:
         result.report["note"] = ("no --mask: the CRDL fitted the regressed lines only, without its silhouette term; "
                                  "give the garment's mask (white = garment, the image's size) from any segmenter to use it")
@@ -56,6 +57,16 @@ def reconstruct(args) -> int:
     return 0
 
 
+def add_silhouette_options(parser) -> None:
+    """--silhouette and --silhouette-weight (``darts reconstruct``, ``darts deform``)."""
+    parser.add_argument("--silhouette", choices=list(SILHOUETTE_WEIGHTS), default="outline",
+                        help="the CRDL's silhouette term with a mask: outline (distance field and outline matching, the "
+                             "same cost at any picture size; default) or soft (1 - soft IoU of a soft rasteriser, slow)")
+    parser.add_argument("--silhouette-weight", type=float, metavar="W",
+                        help="weight of the silhouette term (default: "
+                             + ", ".join(f"{k} {v:g}" for k, v in SILHOUETTE_WEIGHTS.items()) + ")")
+
+
 def add_parsers(groups) -> None:
     """Register ``darts reconstruct`` and ``darts classify``."""
     parser = groups.add_parser(
@@ -68,6 +79,7 @@ def add_parsers(groups) -> None:
     parser.add_argument("--mask", metavar="MASK", help="garment mask, the image's size (white = garment): the CRDL's "
                         "silhouette term, and the classifier sees the garment alone")
     parser.add_argument("--camera", metavar="camera.json", help="the picture's camera (docs/crdl.md)")
+    add_silhouette_options(parser)
     parser.add_argument("--category", help="skip the classifier")
     parser.add_argument("--body", metavar="PATH", help="SMPL-format body (default: the bundled body)")
     parser.add_argument("--betas", type=float, nargs="+", metavar="B", help="body shape (default: the rest shape)")

@@ -11,6 +11,7 @@ import numpy as np
 import torch
 
 from darts.camera import Camera
+from darts.crdl.term import SilhouetteTerm
 from darts.errors import DartsInputError
 
 SIGMA = 1.0  # pixels: the width of a triangle's soft edge
@@ -72,7 +73,7 @@ def soft_silhouette(pixels: torch.Tensor, depth: torch.Tensor, faces: np.ndarray
     return (1 - torch.exp(missed)).reshape(height, width)
 
 
-class Silhouette:
+class Silhouette(SilhouetteTerm):
     """L_sil(p) = 1 - soft IoU of the garment's soft silhouette (faces [F,3]) with the mask."""
 
     def __init__(self, mask: np.ndarray, camera: Camera, faces: np.ndarray | None = None):
@@ -98,10 +99,17 @@ class Silhouette:
         overlap = (image * self.mask).sum()
         return 1 - overlap / (image.sum() + self.mask.sum() - overlap).clamp_min(1e-9)
 
-    def value_and_gradient(self, vertices: torch.Tensor) -> tuple[float, torch.Tensor]:
-        """L_sil and dL_sil/dp [V,3] at ``vertices`` (for the local-global solver's proximal step)."""
-        with torch.enable_grad():
-            p = vertices.detach().clone().requires_grad_(True)
-            loss = self.loss(p)
-            (grad,) = torch.autograd.grad(loss, p)
-        return float(loss.detach()), grad
+
+def silhouette_term(name: str, mask: np.ndarray, camera: Camera):
+    """The silhouette term ``name`` (``darts.crdl.SILHOUETTE_WEIGHTS``) of a garment ``mask`` [H,W]
+    bool seen by ``camera``."""
+    if name == "outline":
+        from darts.crdl.outline import Outline
+
+        return Outline(mask, camera)
+    if name == "soft":
+        return Silhouette(mask, camera)
+    from darts.crdl import SILHOUETTE_WEIGHTS
+
+    raise DartsInputError(None, f"unknown silhouette term '{name}' (one of {', '.join(SILHOUETTE_WEIGHTS)})")
+

@@ -98,13 +98,16 @@ class Reconstruction:
 
 def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
                 mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH,
-                progress: bool = False) -> Reconstruction:
+                progress: bool = False, silhouette_term: str = "outline",
+                silhouette_weight: float | None = None) -> Reconstruction:
     """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
     switches the CRDL's silhouette term on and shows the classifier the garment alone; ``progress``
-    shows the CRDL's steps."""
+    shows the CRDL's steps; ``silhouette_term``: which (``darts.crdl.SILHOUETTE_WEIGHTS``),
+    at ``silhouette_weight`` (default: the term's)."""
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
-    from darts.crdl.silhouette import Silhouette
+    from darts.crdl import SILHOUETTE_WEIGHTS
+    from darts.crdl.silhouette import silhouette_term as make_term
     from darts.dart.build import make_dart
 
     times, started = {}, time.perf_counter()
@@ -124,8 +127,9 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     mark = time.perf_counter()
     template = make_dart(category, body, betas=None if not betas else np.asarray(betas), edge_length=edge_length)
     times["template_s"] = time.perf_counter() - mark
-    silhouette = None if mask is None else Silhouette(mask, camera)
-    weights = CrdlWeights(silhouette=1.0 if silhouette is not None else 0.0)
+    silhouette = None if mask is None else make_term(silhouette_term, mask, camera)
+    weight = SILHOUETTE_WEIGHTS[silhouette_term] if silhouette_weight is None else silhouette_weight
+    weights = CrdlWeights(silhouette=weight if silhouette is not None else 0.0)
     mark = time.perf_counter()
     dart, crdl = deform_dart(template, body, lines, "local-global", weights, silhouette, progress=progress)
     times["crdl_s"] = time.perf_counter() - mark

@@ -3,7 +3,6 @@ command's --help can name them without loading it."""
 
 DEFAULT_EDGE_LENGTH = 0.011  # metres: a short-sleeve top gets about 6k vertices on the default body
 #: metres: the templates of the reconstruction dataset and of ``darts reconstruct`` (2-4k vertices;
-#: a 224 px picture resolves about 7 mm, and the CRDL's silhouette term costs about 1 s an
-#: iteration here, several times that at DEFAULT_EDGE_LENGTH)
+#: a 224 px picture resolves about 7 mm)
 DATASET_EDGE_LENGTH = 0.02
 DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal
