@@ -171,13 +171,14 @@ def _picture_mask(mask, picture: np.ndarray):
 
 def reconstruct(image, category: str | None = None, camera=None, mask=None, body=None,
                 betas: Sequence[float] | None = None, edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False,
-                silhouette: str = "outline", silhouette_weight: float | None = None):
+                silhouette: str = "outline", silhouette_weight: float | None = None, accept_low_confidence: bool = False):
     """The DART of the garment in ``image`` (a path or [H,W,3] uint8): classifier (unless
     ``category``), feature-line regressor, CRDL (with the silhouette term ``silhouette``, at
     ``silhouette_weight`` (default: the term's, ``darts.crdl.SILHOUETTE_WEIGHTS``), when ``mask`` is given).
     ``camera``: a ``Camera`` or camera.json (default: the dataset's camera of the category). Returns
     a ``Reconstruction``: ``.dart`` and ``.report`` (category, probabilities, lines, CRDL numbers,
-    seconds per stage)."""
+    seconds per stage). A picture too small, blurred or blank, or whose garment the classifier is not
+    sure of (unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``)."""
     from darts.camera import Camera
     from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.regress.pipeline import reconstruct as run
@@ -199,5 +200,11 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     model = load_body(body)
     if betas is not None and len(betas) > model.num_betas:
         raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
-    return run(picture, model, category, camera, _picture_mask(mask, picture), betas=betas, edge_length=edge_length,
-               progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight)
+    try:
+        return run(picture, model, category, camera, _picture_mask(mask, picture), betas=betas, edge_length=edge_length,
+                   progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight,
+                   accept_low_confidence=accept_low_confidence)
+    except DartsInputError as error:
+        if error.source is None and isinstance(image, (str, os.PathLike)):
+            raise DartsInputError(image, error.problem.removeprefix("the picture ")) from None
+        raise

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from PIL import Image
+from PIL import Image, ImageFilter
 
 from darts.dart.io import load_dart
 from darts.fileio import read_npz, save_npz
@@ -17,6 +17,8 @@ from darts.templates.categories import CATEGORIES
 
 SAMPLE = Path(__file__).parents[1] / "scenes" / "reconstruct"
 META = json.loads((SAMPLE / "sample.json").read_text())
+#: a half-length portrait in a uniform jacket, shipped with matplotlib: no garment of the ten categories
+PORTRAIT = Path(__import__("matplotlib").get_data_path()) / "sample_data" / "grace_hopper.jpg"
 
 
 def _line_error_cm(lines: dict, truth: dict) -> float:
@@ -105,6 +107,10 @@ def test_huge_images_are_refused_before_they_are_decoded(command, where, size, t
 
 @pytest.mark.parametrize("case, problem", [
     ("not an image", "not an image"),
+    ("tiny", "is 1x1 pixels: too small"),
+    ("blank", "too blurred or blank"),
+    ("blurred", "too blurred or blank"),
+    ("portrait", "shows no garment the classifier recognises: its best guess is"),
     ("mask size", "the mask is 100x100 pixels but the image is 224x224"),
     ("camera", "not a JSON camera"),
     ("category", "unknown category 'poncho'"),
@@ -115,6 +121,14 @@ def test_bad_reconstruct_input_is_one_line_exit_2_and_no_output(case, problem, t
     if case == "not an image":
         image = tmp_path / "image.png"
         image.write_bytes(b"\x89PNG this is not a picture")
+    elif case in ("tiny", "blank", "blurred"):
+        image = tmp_path / "image.png"
+        picture = {"tiny": lambda: Image.new("RGB", (1, 1)), "blank": lambda: Image.new("RGB", (224, 224), (128, 128, 128)),
+                   "blurred": lambda: Image.open(SAMPLE / "image.png").filter(ImageFilter.GaussianBlur(3))}[case]()
+        picture.save(image)
+        mask, camera = None, None
+    elif case == "portrait":
+        image, mask, camera = PORTRAIT, None, None
     elif case == "mask size":
         mask = tmp_path / "mask.png"
         Image.fromarray(np.full((100, 100), 255, np.uint8)).save(mask)
@@ -124,6 +138,33 @@ def test_bad_reconstruct_input_is_one_line_exit_2_and_no_output(case, problem, t
     else:
         extra = ["--category", "poncho"]
     out = tmp_path / "garment.npz"
-    code, stdout, err = run_darts("reconstruct", image, "--mask", mask, "--camera", camera, "-o", out, *extra)
+    options = [*(["--mask", mask] if mask else []), *(["--camera", camera] if camera else [])]
+    code, stdout, err = run_darts("reconstruct", image, *options, "-o", out, *extra)
     assert code == 2 and stdout == "" and len(err.strip().splitlines()) == 1 and problem in err, err
     assert not out.exists() and list(tmp_path.glob("*.npz")) == []
+
+
+def test_a_low_confidence_answer_only_when_asked_and_the_report_says_what_was_given(run_darts, tmp_path):
+    """The portrait (sleeveless top at 44 %) goes through with --accept-low-confidence, and the report
+    carries every category's probability, low_confidence and what was given (nothing but the picture)."""
+    out, report = tmp_path / "garment.npz", tmp_path / "report.json"
+    code, stdout, err = run_darts("reconstruct", PORTRAIT, "-o", out, "--report", report, "--accept-low-confidence",
+                                  "--edge-length", "0.05")
+    assert code == 0 and "low confidence, accepted" in stdout, err
+    data = json.loads(report.read_text())
+    assert data["low_confidence"] and data["probability"] < 0.5 and len(data["probabilities"]) == len(CATEGORIES)
+    assert sum(data["probabilities"].values()) == pytest.approx(1.0, abs=1e-4)
+    assert data["given"] == {"category": False, "camera": False, "mask": False, "betas": False}
+    assert (data["camera"]["width"], data["camera"]["height"]) == (512, 600) and load_dart(out).category == data["category"]
+
+
+def test_sharpness_tells_the_sample_from_its_blurred_copies():
+    """The held-out sample passes the sharpness limit; blurred by a Gaussian of radius 2 or 3 pixels it does not."""
+    from darts.fileio import read_image
+    from darts.regress.checks import MIN_SHARPNESS, sharpness
+
+    sample = Image.open(SAMPLE / "image.png").convert("RGB")
+    assert sharpness(read_image(SAMPLE / "image.png")) > 5 * MIN_SHARPNESS
+    for radius in (2, 3):
+        assert sharpness(np.asarray(sample.filter(ImageFilter.GaussianBlur(radius)))) < MIN_SHARPNESS
+

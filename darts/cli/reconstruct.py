@@ -37,7 +37,8 @@ def reconstruct(args) -> int:
     if args.sim_out:
         check_output(args.sim_out, SIM_SUFFIXES)
     result = api.reconstruct(args.image, args.category, args.camera, args.mask, args.body, args.betas, args.edge_length,
-                             progress=True, silhouette=args.silhouette, silhouette_weight=args.silhouette_weight)
+                             progress=True, silhouette=args.silhouette, silhouette_weight=args.silhouette_weight,
+                             accept_low_confidence=args.accept_low_confidence)
     if args.mask is None:
         result.report["note"] = ("no --mask: the CRDL fitted the regressed lines only, without its silhouette term; "
                                  "give the garment's mask (white = garment, the image's size) from any segmenter to use it")
@@ -48,7 +49,8 @@ def reconstruct(args) -> int:
     report = result.report
     print(f"{report['category']} ({100 * report['probability']:.1f} %): wrote {args.output}, {report['vertices']} vertices, "
           f"lines fitted to {1e3 * report['crdl']['handle_rmse']:.2f} mm, {100 * report['crdl']['penetration']:.2f} % inside "
-          f"the body, {report['times']['total_s']:.1f} s" + ("" if args.mask is not None else " (no mask: no silhouette term)"))
+          f"the body, {report['times']['total_s']:.1f} s" + ("" if args.mask is not None else " (no mask: no silhouette term)")
+          + (" (low confidence, accepted)" if report["low_confidence"] else ""))
     if args.simulate:
         command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
         if args.body:
@@ -81,6 +83,9 @@ def add_parsers(groups) -> None:
     parser.add_argument("--camera", metavar="camera.json", help="the picture's camera (docs/crdl.md)")
     add_silhouette_options(parser)
     parser.add_argument("--category", help="skip the classifier")
+    parser.add_argument("--accept-low-confidence", action="store_true",
+                        help="go on when the classifier's best guess is under 50 %% (the report says low_confidence); "
+                             "without it such a picture is refused")
     parser.add_argument("--body", metavar="PATH", help="SMPL-format body (default: the bundled body)")
     parser.add_argument("--betas", type=float, nargs="+", metavar="B", help="body shape (default: the rest shape)")
     parser.add_argument("--edge-length", type=float, default=DATASET_EDGE_LENGTH, metavar="L",

@@ -99,26 +99,40 @@ class Reconstruction:
 def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
                 mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH,
                 progress: bool = False, silhouette_term: str = "outline",
-                silhouette_weight: float | None = None) -> Reconstruction:
+                silhouette_weight: float | None = None, accept_low_confidence: bool = False) -> Reconstruction:
     """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
     switches the CRDL's silhouette term on and shows the classifier the garment alone; ``progress``
     shows the CRDL's steps; ``silhouette_term``: which (``darts.crdl.SILHOUETTE_WEIGHTS``),
-    at ``silhouette_weight`` (default: the term's)."""
+    at ``silhouette_weight`` (default: the term's). A picture that is too small, blurred or blank, or
+    whose garment the classifier is not sure of (``darts.regress.checks``; the latter unless
+    ``accept_low_confidence``) raises ``DartsInputError`` before anything is built."""
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
     from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.crdl.silhouette import silhouette_term as make_term
     from darts.dart.build import make_dart
 
+    from darts.regress.checks import confidence_problem, picture_problem
+
+    problem = picture_problem(image, mask)
+    if problem:
+        raise DartsInputError(None, f"the picture {problem}")
     times, started = {}, time.perf_counter()
+    low_confidence = False
     if category is None:
         ranked = classify_image(image, mask)
         category, probability = ranked[0]
         times["classify_s"] = time.perf_counter() - started
+        problem = confidence_problem(ranked)
+        if problem and not accept_low_confidence:
+            raise DartsInputError(None, f"the picture {problem}")
+        low_confidence = problem is not None
     else:
         ranked, probability = [(category, 1.0)], 1.0
     height, width = image.shape[:2]
-    camera = camera or Camera.default(category, width)
+    given_camera = camera is not None
+    # Without a camera: the dataset's, for the picture as the networks see it (stretched to a square).
+    camera = camera or scaled(Camera.default(category), width, height)
     if (camera.width, camera.height) != (width, height):
         raise DartsInputError(None, f"the camera is {camera.width}x{camera.height} pixels but the image is {width}x{height}")
     mark = time.perf_counter()
@@ -136,6 +150,9 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     times["total_s"] = time.perf_counter() - started
     report = {"category": category, "probability": probability,
               "top_categories": [{"category": c, "probability": p} for c, p in ranked[:3]],
+              "probabilities": dict(ranked) if len(ranked) > 1 else None, "low_confidence": low_confidence,
+              "given": {"category": len(ranked) == 1, "camera": given_camera, "mask": mask is not None,
+                        "betas": bool(betas)},
               "camera": camera.as_dict(), "silhouette": silhouette is not None,
               "lines": {name: points.round(5).tolist() for name, points in lines.items()},
               "crdl": {k: v for k, v in crdl.items() if k != "objective_history"},
