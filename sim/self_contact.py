@@ -338,13 +338,16 @@ def find_edge_contacts(faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtyp
                        vertex_edge_start: wp.array(dtype=wp.int32), vertex_edges: wp.array(dtype=wp.int32),
                        contact_face: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
                        x_start: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), reach: float, exclusion: float,
+                       layer: wp.array(dtype=wp.int32), edge_face: wp.array(dtype=wp.int32),
                        partner: wp.array(dtype=wp.int32), partner_st: wp.array(dtype=wp.vec2),
                        partner_side: wp.array(dtype=float)):
     """For each garment edge ab, the closest edge cd (-1: none) within ``reach`` that passes
     ``edge_candidate``, among its last partner and the edges at the corners of the triangles that
     a's and b's vertex-triangle contacts found (the other layer, where it is near; no BVH walk); its
-    closest-point parameters, and the side along n = ab x cd to keep: from the last search for the
-    same pair, else the side at the start of the substep (``x_start``)."""
+    closest-point parameters, and the side along n = ab x cd to keep. Between two garments of an
+    outfit the side is known: the outer edge stays on the normal side of a triangle at the inner
+    edge (``edge_face``). Within a garment it is kept from the last search for the same pair, else
+    the side at the start of the substep (``x_start``)."""
     e = wp.tid()
     a, b = edges[e, 0], edges[e, 1]
     best = int(-1)
@@ -369,7 +372,17 @@ def find_edge_contacts(faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtyp
                     best = other
                     best_distance = candidate[0]
                     best_st = wp.vec2(candidate[1], candidate[2])
-    if best >= 0 and best != partner[e]:
+    known = int(0)
+    if best >= 0 and layer[edges[best, 0]] != layer[a]:
+        other_c, other_d = edges[best, 0], edges[best, 1]
+        inner = wp.where(layer[a] < layer[other_c], e, best)  # the edge of the inner garment
+        if edge_face[inner] >= 0:
+            outward = face_normal(x, faces, edge_face[inner])
+            # the gap (this edge minus the other) points out of the inner garment when this edge is outer
+            outer_sign = wp.where(layer[a] > layer[other_c], 1.0, -1.0)
+            partner_side[e] = wp.sign(outer_sign * wp.dot(outward, wp.cross(x[b] - x[a], x[other_d] - x[other_c])))
+            known = 1
+    if known == 0 and best >= 0 and best != partner[e]:
         c, d = edges[best, 0], edges[best, 1]
         gap = wp.lerp(x_start[a], x_start[b], best_st[0]) - wp.lerp(x_start[c], x_start[d], best_st[1])
         partner_side[e] = wp.sign(wp.dot(gap, wp.cross(x_start[b] - x_start[a], x_start[d] - x_start[c])))
@@ -493,6 +506,21 @@ def count_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: w
             return
 
 
+def edge_faces(edges: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """[E]: a triangle of ``faces`` [F,3] that has each edge of ``edges`` [E,2] (-1 where none does)."""
+    faces = np.asarray(faces, np.int64)
+    sides = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    owner = np.tile(np.arange(len(faces)), 3)
+    count = int(max(faces.max(initial=0), np.asarray(edges).max(initial=0))) + 1
+    keys = sides[:, 0] * count + sides[:, 1]
+    order = np.argsort(keys, kind="stable")
+    wanted = np.sort(np.asarray(edges, np.int64), axis=1)
+    at = np.searchsorted(keys[order], wanted[:, 0] * count + wanted[:, 1])
+    at = np.minimum(at, len(order) - 1)
+    found = keys[order][at] == wanted[:, 0] * count + wanted[:, 1]
+    return np.where(found, owner[order][at], -1).astype(np.int32)
+
+
 def vertex_edge_lists(edges: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
     """Edges at each vertex as CSR: vertex v's edge indices are incident[start[v]:start[v + 1]]."""
     ends = np.asarray(edges, np.int64).reshape(-1)
@@ -523,6 +551,7 @@ class SelfContact:
         self.bary = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self.side = wp.zeros(self.count, dtype=float, device=device)
         start, incident = vertex_edge_lists(edges, self.count)
+        self.edge_face = wp.array(edge_faces(edges, faces), dtype=wp.int32, device=device)
         self.vertex_edge_start = wp.array(start, dtype=wp.int32, device=device)
         self.vertex_edges = wp.array(incident, dtype=wp.int32, device=device)
         self.partner = wp.full(self.edges.shape[0], -1, dtype=wp.int32, device=device)
@@ -563,7 +592,8 @@ class SelfContact:
         if self.edge_edge:
             self.launch(find_edge_contacts, self.edges.shape[0],
                         [self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,
-                         x_start, self.rest, reach, self.exclusion, self.partner, self.partner_st, self.partner_side])
+                         x_start, self.rest, reach, self.exclusion, self.layer, self.edge_face, self.partner,
+                         self.partner_st, self.partner_side])
 
     def resolve(self, inverse_mass, body_push) -> None:
         """One sweep keeping every particle ``separation`` off its triangle and every edge off its

@@ -252,3 +252,17 @@ def test_candidate_lists_find_every_contact_the_brute_force_finds():
     contact.search(x, v, reach, 0.0, 50.0, broad=(0.012, 0.0, 0.005))  # 12 mm is over the most: no lists
     assert (contact.candidate_count.numpy() == -1).all()
     _matches_brute_force(contact, positions, rest, faces, reach, exclusion, everyone)
+
+
+def test_edge_faces_gives_each_edge_a_triangle_that_has_it():
+    """The triangle an edge's known side is read from (outfits): one that has both its ends, in
+    either order; -1 for a pair that is no triangle's edge."""
+    from sim.self_contact import edge_faces
+
+    faces = np.array([[0, 1, 2], [2, 1, 3]])
+    edges = np.array([[1, 0], [1, 2], [3, 2], [0, 3]])
+    found = edge_faces(edges, faces)
+    assert found.tolist()[:3] in ([0, 0, 1], [0, 1, 1]) and found[3] == -1
+    for edge, face in zip(edges[:3], found[:3]):
+        assert set(edge) <= set(faces[face])
+
