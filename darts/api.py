@@ -98,7 +98,7 @@ def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None,
     (default: the term's). Returns (the deformed ``Dart``, its report: arap_energy, handle_rmse (m),
     penetration (fraction of vertices inside the body), iterations, wall_seconds)."""
     from darts.camera import Camera
-    from darts.crdl import SILHOUETTE_WEIGHTS, SOLVERS
+    from darts.crdl import SILHOUETTE_WEIGHTS, SOLVERS, check_silhouette
     from darts.crdl.deform import deform_dart, weld_garment
     from darts.crdl.layer import CrdlWeights
     from darts.crdl.silhouette import read_mask, silhouette_term
@@ -111,8 +111,7 @@ def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None,
         raise DartsInputError(None, "a mask and its camera go together")
     if solver not in SOLVERS:
         raise DartsInputError(None, f"unknown CRDL solver '{solver}' (one of {', '.join(SOLVERS)})")
-    if silhouette not in SILHOUETTE_WEIGHTS:
-        raise DartsInputError(None, f"unknown silhouette term '{silhouette}' (one of {', '.join(SILHOUETTE_WEIGHTS)})")
+    check_silhouette(silhouette)
     dart = load_garment(garment)
     model = load_body(body)
     if model.name != dart.body_model:
@@ -180,14 +179,13 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     seconds per stage). A picture too small, blurred or blank, or whose garment the classifier is not
     sure of (unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``)."""
     from darts.camera import Camera
-    from darts.crdl import SILHOUETTE_WEIGHTS
+    from darts.crdl import check_silhouette
     from darts.regress.pipeline import reconstruct as run
     from darts.templates.categories import CATEGORIES
 
     if category is not None and category not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{category}' (one of {', '.join(CATEGORIES)})")
-    if silhouette not in SILHOUETTE_WEIGHTS:
-        raise DartsInputError(None, f"unknown silhouette term '{silhouette}' (one of {', '.join(SILHOUETTE_WEIGHTS)})")
+    check_silhouette(silhouette)
     if not 0.003 <= edge_length <= 0.1:
         raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
     picture = read_picture(image)

@@ -12,7 +12,9 @@ pulled back instead of pushed through. Edges get the same treatment against the 
 garment triangles near them (closest points of two segments, both inside their segments, kept
 ``separation`` apart along the edges' common normal on the side they started on), which catches
 two layers whose edges slide through each other between vertices. All corrections of a sweep are
-averaged per particle before they are applied.
+averaged per particle before they are applied. Between two garments of an outfit the side is not
+remembered but known, outer over inner (every garment's triangles face away from the body), so a
+particle or edge that has passed through another garment is pulled back out.
 """
 from __future__ import annotations
 

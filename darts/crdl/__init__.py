@@ -6,3 +6,11 @@ SOLVERS = ("local-global", "adam")
 #: default: ``outline`` (distance field and outline matching, ``darts.crdl.outline``: the same cost at
 #: any picture size, the default) and ``soft`` (1 - soft IoU of a soft rasteriser: a pixel loop per face).
 SILHOUETTE_WEIGHTS = {"outline": 1.0, "soft": 1.0}
+
+
+def check_silhouette(name: str) -> None:
+    """A DartsInputError unless ``name`` is one of the silhouette terms."""
+    if name not in SILHOUETTE_WEIGHTS:
+        from darts.errors import DartsInputError
+
+        raise DartsInputError(None, f"unknown silhouette term '{name}' (one of {', '.join(SILHOUETTE_WEIGHTS)})")

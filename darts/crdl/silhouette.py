@@ -103,13 +103,12 @@ class Silhouette(SilhouetteTerm):
 def silhouette_term(name: str, mask: np.ndarray, camera: Camera):
     """The silhouette term ``name`` (``darts.crdl.SILHOUETTE_WEIGHTS``) of a garment ``mask`` [H,W]
     bool seen by ``camera``."""
+    from darts.crdl import check_silhouette
+
+    check_silhouette(name)
     if name == "outline":
         from darts.crdl.outline import Outline
 
         return Outline(mask, camera)
-    if name == "soft":
-        return Silhouette(mask, camera)
-    from darts.crdl import SILHOUETTE_WEIGHTS
-
-    raise DartsInputError(None, f"unknown silhouette term '{name}' (one of {', '.join(SILHOUETTE_WEIGHTS)})")
+    return Silhouette(mask, camera)
 

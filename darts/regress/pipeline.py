@@ -106,12 +106,11 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     at ``silhouette_weight`` (default: the term's). A picture that is too small, blurred or blank, or
     whose garment the classifier is not sure of (``darts.regress.checks``; the latter unless
     ``accept_low_confidence``) raises ``DartsInputError`` before anything is built."""
+    from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
-    from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.crdl.silhouette import silhouette_term as make_term
     from darts.dart.build import make_dart
-
     from darts.regress.checks import confidence_problem, picture_problem
 
     problem = picture_problem(image, mask)
