@@ -29,15 +29,11 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def upscaled(image: np.ndarray, mask: np.ndarray, camera, size: int):
     """The picture at ``size`` x ``size`` pixels (square pictures only), its mask and camera."""
-    from dataclasses import replace
-
     from PIL import Image
 
-    k = size / image.shape[1]
     big = np.asarray(Image.fromarray(image).resize((size, size), Image.BICUBIC))
     soft = np.asarray(Image.fromarray((mask * 255).astype(np.uint8)).resize((size, size), Image.BILINEAR))
-    return big, soft > 127, replace(camera, width=size, height=size, fx=camera.fx * k, fy=camera.fy * k,
-                                    cx=camera.cx * k, cy=camera.cy * k)
+    return big, soft > 127, camera.resized(size, size)
 
 
 def main() -> None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -97,6 +97,12 @@ class Camera:
         down = np.cross(forward, right)
         rotation = np.stack([right, down, forward])  # rows: camera x, y, z in canonical coordinates
         return cls(int(width), int(height), float(focal), float(focal), width / 2.0, height / 2.0, rotation, -rotation @ eye)
+
+    def resized(self, width: int, height: int) -> "Camera":
+        """The same view at ``width`` x ``height`` pixels (intrinsics scaled per axis)."""
+        sx, sy = width / self.width, height / self.height
+        return replace(self, width=width, height=height, fx=self.fx * sx, fy=self.fy * sy, cx=self.cx * sx,
+                       cy=self.cy * sy)
 
     def as_dict(self) -> dict:
         return {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy, "cx": self.cx, "cy": self.cy,

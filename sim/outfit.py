@@ -161,12 +161,12 @@ def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray
     models = [_remeasured(m) if lift.any() else m for m, lift in zip(models, lifts)]
     vertex_edges = np.cumsum([0] + [len(d.vertices) for d in darts])
     particle_edges = np.cumsum([0] + [len(m.rest) for m in models])
-    outfit = Outfit(darts=list(darts), names=names, model=_join(models, names),
+    model = _join(models, names)
+    outfit = Outfit(darts=list(darts), names=names, model=model,
                     vertex_slices=[slice(a, b) for a, b in zip(vertex_edges[:-1], vertex_edges[1:])],
                     particle_slices=[slice(a, b) for a, b in zip(particle_edges[:-1], particle_edges[1:])],
-                    lift=np.concatenate(lifts), caps=np.zeros((0, 3), np.int64))
-    outfit.model.body_offset = covering_offsets(outfit, outfit.model.rest)
-    outfit.caps = opening_caps(outfit.model, outfit.model.rest)
+                    lift=np.concatenate(lifts), caps=opening_caps(model, model.rest))
+    model.body_offset = covering_offsets(outfit, model.rest)
     return outfit
 
 
@@ -224,9 +224,8 @@ def layer_order(outfit: Outfit, particles: np.ndarray, body_vertices: np.ndarray
     """For each pair of garments (inner, outer), keyed ``"outer in inner"``: the fraction of the outer
     garment's particles under the inner garment's cloth, and the fraction inside its closed surface.
 
-    Inside: the winding number (> 1/2) of the inner garment closed by its caps (``closed_surface``,
-    the surface the outer garment collides with; open, a sleeve passing an armhole would count as
-    inside it). Under the cloth: inside, and the inner garment's cloth lies over the particle: the
+    Inside: the winding number (> 1/2) of the inner garment closed by its caps (``closed_surface``;
+    open, a sleeve passing an armhole would count as inside it). Under the cloth: inside, and the inner garment's cloth lies over the particle: the
     segment of ``COVER`` from it along the body's outward normal at its closest body point passes
     through an inner triangle. A particle inside but not under the cloth lies in an opening that the
     body fills, on the skin (the top's underarm in a sleeveless dress's armhole, pressed into the

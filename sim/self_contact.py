@@ -509,18 +509,19 @@ def count_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: w
 
 
 def edge_faces(edges: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """[E]: a triangle of ``faces`` [F,3] that has each edge of ``edges`` [E,2] (-1 where none does)."""
+    """[E]: a triangle of ``faces`` [F,3] that has each edge of ``edges`` [E,2] (-1 where none does),
+    by the undirected edge keys of ``darts.geometry.mesh.half_edges`` (half-edge h is face h // 3's)."""
+    from darts.geometry.mesh import half_edges
+
     faces = np.asarray(faces, np.int64)
-    sides = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    owner = np.tile(np.arange(len(faces)), 3)
-    count = int(max(faces.max(initial=0), np.asarray(edges).max(initial=0))) + 1
-    keys = sides[:, 0] * count + sides[:, 1]
-    order = np.argsort(keys, kind="stable")
-    wanted = np.sort(np.asarray(edges, np.int64), axis=1)
-    at = np.searchsorted(keys[order], wanted[:, 0] * count + wanted[:, 1])
-    at = np.minimum(at, len(order) - 1)
-    found = keys[order][at] == wanted[:, 0] * count + wanted[:, 1]
-    return np.where(found, owner[order][at], -1).astype(np.int32)
+    _, _, key = half_edges(faces)
+    base = int(faces.max()) + 1
+    low, high = np.sort(np.asarray(edges, np.int64), axis=1).T
+    wanted = low * base + high
+    order = np.argsort(key, kind="stable")
+    at = np.minimum(np.searchsorted(key[order], wanted), len(order) - 1)
+    found = (high < base) & (key[order][at] == wanted)
+    return np.where(found, order[at] // 3, -1).astype(np.int32)
 
 
 def vertex_edge_lists(edges: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:

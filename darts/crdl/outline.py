@@ -34,17 +34,13 @@ WORKING_SIZE = 160
 
 def _working(mask: np.ndarray, camera: Camera) -> tuple[np.ndarray, Camera]:
     """``mask`` [H,W] and ``camera`` at the working resolution (module docstring)."""
-    from dataclasses import replace
-
     from PIL import Image
 
     rows, cols = np.nonzero(mask)
     k = WORKING_SIZE / max(rows.max() - rows.min() + 1, cols.max() - cols.min() + 1)
     width, height = max(1, round(mask.shape[1] * k)), max(1, round(mask.shape[0] * k))
     grey = Image.fromarray(mask.astype(np.uint8) * 255).resize((width, height), Image.BILINEAR)
-    sx, sy = width / mask.shape[1], height / mask.shape[0]
-    return np.asarray(grey) > 127, replace(camera, width=width, height=height, fx=camera.fx * sx, fy=camera.fy * sy,
-                                           cx=camera.cx * sx, cy=camera.cy * sy)
+    return np.asarray(grey) > 127, camera.resized(width, height)
 
 
 def _charbonnier(distance: torch.Tensor) -> torch.Tensor:
@@ -54,13 +50,12 @@ def _charbonnier(distance: torch.Tensor) -> torch.Tensor:
 class Outline(SilhouetteTerm):
     """L(p) of the module docstring for a garment ``mask`` [H,W] bool seen by ``camera``."""
 
-    def __init__(self, mask: np.ndarray, camera: Camera, faces: np.ndarray | None = None):
+    def __init__(self, mask: np.ndarray, camera: Camera):
         from scipy import ndimage
 
-        mask, camera = _working(np.asarray(mask, bool), camera)
-        self.mask, self.camera, self.faces = mask, camera, faces
-        filled = ndimage.binary_fill_holes(mask)
-        self.size = float(np.sqrt(mask.sum()))
+        self.mask, self.camera = _working(np.asarray(mask, bool), camera)
+        filled = ndimage.binary_fill_holes(self.mask)
+        self.size = float(np.sqrt(self.mask.sum()))
         self._distance = torch.as_tensor(ndimage.distance_transform_edt(~filled), dtype=torch.float64)[None, None]
         edge = filled & ~ndimage.binary_erosion(filled, border_value=0)
         rows, cols = np.nonzero(edge)
@@ -68,10 +63,8 @@ class Outline(SilhouetteTerm):
         self.outline = np.stack([cols[keep], rows[keep]], 1).astype(np.float64) + 0.5
 
     def bind(self, faces: np.ndarray) -> "Outline":
-        """The same term (it reads vertices only: ``faces`` is kept for the record)."""
-        bound = object.__new__(Outline)
-        bound.__dict__.update(self.__dict__, faces=np.asarray(faces, np.int64))
-        return bound
+        """The same term: it reads the vertices only, not the mesh's ``faces``."""
+        return self
 
     def _outside(self, pixels: torch.Tensor) -> torch.Tensor:
         """D(u) [N] (pixels), bilinear; beyond the picture, D at its border plus the way to it."""

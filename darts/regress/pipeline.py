@@ -15,7 +15,7 @@ Everything is in the body's canonical frame (Y up, metres).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
@@ -50,12 +50,6 @@ def network_input(image: np.ndarray) -> torch.Tensor:
     return x
 
 
-def scaled(camera: Camera, width: int, height: int) -> Camera:
-    """``camera`` for the same view at ``width`` x ``height`` pixels."""
-    sx, sy = width / camera.width, height / camera.height
-    return replace(camera, width=width, height=height, fx=camera.fx * sx, fy=camera.fy * sy, cx=camera.cx * sx, cy=camera.cy * sy)
-
-
 def network_mask(mask: np.ndarray) -> torch.Tensor:
     """bool [H,W] -> bool [1,224,224] (nearest resize when the size differs)."""
     m = torch.from_numpy(np.array(mask, np.float32))[None, None]
@@ -84,7 +78,7 @@ def regress_lines(image: np.ndarray, camera: Camera, category: str, variant: str
     """The feature lines of ``category`` seen in ``image`` through ``camera``: {name: [K,3]}."""
     model, _ = shipped_model("lines", f"lines_{variant}")
     lines, mask, creases = padded(category, initial_lines(category))
-    small = scaled(camera, IMAGE_SIZE, IMAGE_SIZE)
+    small = camera.resized(IMAGE_SIZE, IMAGE_SIZE)
     out = model(network_input(image), camera_batch([small]), torch.from_numpy(lines)[None],
                 torch.from_numpy(creases)[None])[-1][0].numpy().astype(np.float64)
     return {name: out[k] for k, name in enumerate(CATEGORIES[category].line_names)}
@@ -117,8 +111,8 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     if problem:
         raise DartsInputError(None, f"the picture {problem}")
     times, started = {}, time.perf_counter()
-    low_confidence = False
-    if category is None:
+    low_confidence, classified = False, category is None
+    if classified:
         ranked = classify_image(image, mask)
         category, probability = ranked[0]
         times["classify_s"] = time.perf_counter() - started
@@ -131,7 +125,7 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     height, width = image.shape[:2]
     given_camera = camera is not None
     # Without a camera: the dataset's, for the picture as the networks see it (stretched to a square).
-    camera = camera or scaled(Camera.default(category), width, height)
+    camera = camera or Camera.default(category).resized(width, height)
     if (camera.width, camera.height) != (width, height):
         raise DartsInputError(None, f"the camera is {camera.width}x{camera.height} pixels but the image is {width}x{height}")
     mark = time.perf_counter()
@@ -149,8 +143,8 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     times["total_s"] = time.perf_counter() - started
     report = {"category": category, "probability": probability,
               "top_categories": [{"category": c, "probability": p} for c, p in ranked[:3]],
-              "probabilities": dict(ranked) if len(ranked) > 1 else None, "low_confidence": low_confidence,
-              "given": {"category": len(ranked) == 1, "camera": given_camera, "mask": mask is not None,
+              "probabilities": dict(ranked) if classified else None, "low_confidence": low_confidence,
+              "given": {"category": not classified, "camera": given_camera, "mask": mask is not None,
                         "betas": bool(betas)},
               "camera": camera.as_dict(), "silhouette": silhouette is not None,
               "lines": {name: points.round(5).tolist() for name, points in lines.items()},
