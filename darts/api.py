@@ -122,6 +122,8 @@ def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None,
         camera = camera if isinstance(camera, Camera) else Camera.from_json(camera)
         if not isinstance(mask, np.ndarray):
             mask = read_mask(mask, camera.width, camera.height)
+        elif not mask.any():
+            raise DartsInputError(None, "the mask is empty (no garment pixel)")
         term = silhouette_term(silhouette, np.asarray(mask, bool), camera)
     if lines is not None:
         names = list(dart.lines)

@@ -10,6 +10,7 @@ import pytest
 
 import darts
 import sim
+from darts.camera import Camera
 from darts.errors import DartsInputError
 
 DOC = Path(__file__).parents[1] / "docs" / "api.md"
@@ -59,6 +60,9 @@ def test_jobs_travel_as_json_and_come_back_equal():
     (lambda: darts.deform("short-skirt"), "needs either target lines or one or more edits"),
     (lambda: darts.deform("short-skirt", lines={"collar": np.zeros((4, 3))}), "line 'collar' is not a line"),
     (lambda: darts.reconstruct(np.zeros((4, 4), np.uint8)), "[H,W,3] uint8"),
+    (lambda: darts.deform("short-skirt", edits=["hem=0.05"], mask=np.zeros((64, 64), bool),
+                          camera=Camera.default("short-skirt", 64)), "the mask is empty"),
+    (lambda: darts.reconstruct(np.zeros((224, 224, 3), np.uint8), silhouette="fuzzy"), "unknown silhouette term 'fuzzy'"),
     (lambda: sim.simulate("short-skirt", "walk", material="wool"), "unknown material 'wool'"),
     (lambda: sim.simulate("short-skirt", "walk", sim.SimSettings(solver="fem")), "unknown solver 'fem'"),
     (lambda: sim.simulate("short-skirt", "walk", frames=0), "frames must be >= 1"),
