@@ -179,7 +179,8 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     ``camera``: a ``Camera`` or camera.json (default: the dataset's camera of the category). Returns
     a ``Reconstruction``: ``.dart`` and ``.report`` (category, probabilities, lines, CRDL numbers,
     seconds per stage). A picture too small, blurred or blank, or whose garment the classifier is not
-    sure of (unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``)."""
+    sure of, or given alone (no mask, no camera) without a person in it (``darts.photo``; these two
+    unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``)."""
     from darts.camera import Camera
     from darts.crdl import check_silhouette
     from darts.regress.pipeline import reconstruct as run

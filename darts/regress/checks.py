@@ -11,9 +11,13 @@ garment the classifier recognises; otherwise one clear line (``DartsInputError``
   dataset picture has 0.60 or more, a half-length portrait (matplotlib's ``grace_hopper.jpg``) 0.44.
   A caller may accept a lower one (``--accept-low-confidence``); the report then says so.
 
-Not detected (yet): a sharp picture of something else that the classifier is sure of (random noise
-is a long-sleeve top at 89 %, a gift box a short-sleeve top at 83 %): the classifier was trained on
-garments only and has no "none of these" answer.
+- **A person**: a picture given alone (no mask, no camera: a photograph) must show a person
+  (``darts.photo.person.find_person``: BlazePose's detector and its landmark model's presence);
+  random noise (which the classifier calls a long-sleeve top at 89 %) and a gift box (a
+  short-sleeve top at 83 %) show none. With a mask the caller has said where the garment is (the
+  dataset's pictures of pants or skirts show legs without a face, which the detector, anchored on
+  faces, does not find), so no person is looked for. ``--accept-low-confidence`` lets a picture
+  without a person go on too; the report then says so.
 """
 from __future__ import annotations
 
@@ -54,6 +58,12 @@ def picture_problem(image: np.ndarray, mask: np.ndarray | None) -> str | None:
         return (f"is too blurred or blank to read a garment from (sharpness {value:.2g}, at least {MIN_SHARPNESS:g}: "
                 "the variance of the Laplacian at 224 x 224)")
     return None
+
+
+def person_problem() -> str:
+    """Why a picture given alone in which no person was found is not reconstructed."""
+    return ("shows no person (the person detector found none): a photograph must show the person wearing the garment; "
+            "give --mask (and --camera) for a picture of a garment alone, or --accept-low-confidence to go on")
 
 
 def confidence_problem(ranked: list[tuple[str, float]]) -> str | None:

@@ -99,27 +99,46 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     shows the CRDL's steps; ``silhouette_term``: which (``darts.crdl.SILHOUETTE_WEIGHTS``),
     at ``silhouette_weight`` (default: the term's). A picture that is too small, blurred or blank, or
     whose garment the classifier is not sure of (``darts.regress.checks``; the latter unless
-    ``accept_low_confidence``) raises ``DartsInputError`` before anything is built."""
+    ``accept_low_confidence``) raises ``DartsInputError`` before anything is built. A picture given
+    alone (no mask, no camera) must show a person (``darts.photo.person``), found before anything
+    else; the report carries the person's landmarks and the body fitted to them (``darts.photo.fit``:
+    pose, shape, camera), which the garment's reconstruction does not use yet."""
     from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
     from darts.crdl.silhouette import silhouette_term as make_term
     from darts.dart.build import make_dart
-    from darts.regress.checks import confidence_problem, picture_problem
+    from darts.regress.checks import confidence_problem, person_problem, picture_problem
 
     problem = picture_problem(image, mask)
     if problem:
         raise DartsInputError(None, f"the picture {problem}")
     times, started = {}, time.perf_counter()
-    low_confidence, classified = False, category is None
+    low_confidence, classified, person, body_fit = False, category is None, None, None
+    photograph = mask is None and camera is None
+    if photograph:
+        from darts.photo.person import find_person
+
+        person = find_person(image)
+        times["person_s"] = time.perf_counter() - started
+        if person is None and not accept_low_confidence:
+            raise DartsInputError(None, f"the picture {person_problem()}")
+        low_confidence = person is None
+        if person is not None:
+            from darts.photo.fit import fit_body
+
+            mark = time.perf_counter()
+            body_fit = fit_body(person, body, image.shape[1], image.shape[0])
+            times["body_fit_s"] = time.perf_counter() - mark
     if classified:
+        mark = time.perf_counter()
         ranked = classify_image(image, mask)
         category, probability = ranked[0]
-        times["classify_s"] = time.perf_counter() - started
+        times["classify_s"] = time.perf_counter() - mark
         problem = confidence_problem(ranked)
         if problem and not accept_low_confidence:
             raise DartsInputError(None, f"the picture {problem}")
-        low_confidence = problem is not None
+        low_confidence = low_confidence or problem is not None
     else:
         ranked, probability = [(category, 1.0)], 1.0
     height, width = image.shape[:2]
@@ -144,6 +163,8 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     report = {"category": category, "probability": probability,
               "top_categories": [{"category": c, "probability": p} for c, p in ranked[:3]],
               "probabilities": dict(ranked) if classified else None, "low_confidence": low_confidence,
+              "person": None if person is None else person.as_dict(), "person_looked_for": photograph,
+              "body_fit": None if body_fit is None else body_fit.as_dict(),
               "given": {"category": not classified, "camera": given_camera, "mask": mask is not None,
                         "betas": bool(betas)},
               "camera": camera.as_dict(), "silhouette": silhouette is not None,
