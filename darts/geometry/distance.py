@@ -31,6 +31,17 @@ def _closest_points(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: 
         distance[i] = max_dist
 
 
+@wp.kernel
+def _closest_faces(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float,
+                   face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2)):
+    i = wp.tid()
+    query = wp.mesh_query_point_no_sign(mesh, points[i], max_dist)
+    face[i] = -1
+    if query.result:
+        face[i] = query.face
+        uv[i] = wp.vec2(query.u, query.v)
+
+
 class SurfaceDistance:
     """Signed distances and closest points to a fixed closed mesh (Warp CPU backend)."""
 
@@ -51,3 +62,13 @@ class SurfaceDistance:
         wp.launch(_closest_points, dim=len(points), inputs=[self.mesh.id, pts, max_dist, int(winding), dist, closest, normal],
                   device=self.device)
         return dist.numpy().astype(np.float64), closest.numpy().astype(np.float64), normal.numpy().astype(np.float64)
+
+    def closest_faces(self, points: np.ndarray, max_dist: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
+        """(face [N] of each point's closest surface point, -1 if none within ``max_dist``; its
+        barycentrics [N,3] in the face's corner order)."""
+        pts = wp.array(np.ascontiguousarray(points, np.float32), dtype=wp.vec3, device=self.device)
+        face = wp.zeros(len(points), dtype=wp.int32, device=self.device)
+        uv = wp.zeros(len(points), dtype=wp.vec2, device=self.device)
+        wp.launch(_closest_faces, dim=len(points), inputs=[self.mesh.id, pts, max_dist, face, uv], device=self.device)
+        u, v = uv.numpy().astype(np.float64).T
+        return face.numpy(), np.stack([u, v, 1.0 - u - v], 1)

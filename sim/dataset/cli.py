@@ -26,15 +26,16 @@ def garment_jobs(count: int, views: int, seed: int, categories: list[str]) -> li
             for index in range(math.ceil(count / views))]
 
 
-def sample_jobs(garment_rows: list[dict], views: int) -> list[Job]:
-    """``views`` pictures of every finished garment in its split; test garments also in test_unseen."""
+def sample_jobs(garment_rows: list[dict], views: int, unseen: bool = True) -> list[Job]:
+    """``views`` pictures of every finished garment in its split; test garments also in test_unseen
+    (unless not ``unseen``: the posed dataset has one appearance range)."""
     from sim.dataset.make import GARMENTS
 
     jobs = []
     for row in garment_rows:
         if row["status"] != "ok":
             continue
-        for split in (row["split"], "test_unseen") if row["split"] == "test" else (row["split"],):
+        for split in (row["split"], "test_unseen") if row["split"] == "test" and unseen else (row["split"],):
             for view in range(views):
                 name = f"{row['id']}-{view}"
                 jobs.append(Job(f"{split}-{name}", {"garment_folder": f"{GARMENTS}/{row['id']}", "split": split,
@@ -50,14 +51,24 @@ def _stats(values) -> dict:
             "max": round(float(values.max()), 3)}
 
 
+#: (garment stages timed, garment measures, sample measures) of each kind of dataset's summary
+SUMMARY_KEYS = {
+    "rest": (("template_s", "crdl_s", "drape_s"), ("drape_penetration", "drape_drop"),
+             ("line_boundary_median_px", "line_off_mask_max_px", "line_behind_body")),
+    "posed": (("build_s", "simulate_s"), ("penetration", "frame"), ("garment_pixels", "joints_in_view")),
+}
+
+
 def summarise(garments: list[dict], samples: list[dict], args) -> dict:
-    """Counts per split and category, times per stage, how the lines sit on the masks, failures."""
+    """Counts per split and category, times per stage, the garments' and the samples' measures
+    (for the rest-pose dataset: drape penetration and drop, how the lines sit on the masks), failures."""
     ok_garments = [r for r in garments if r["status"] == "ok"]
     ok_samples = [r for r in samples if r["status"] == "ok"]
     split_of = {r["id"]: r["split"] for r in samples}
+    stages, garment_keys, sample_keys = SUMMARY_KEYS["posed" if args.posed else "rest"]
     return {
         "command": f"darts dataset make OUT_DIR --count {args.count} --seed {args.seed} --views {args.views}"
-                   + (f" --categories {' '.join(args.categories)}" if args.categories else ""),
+                   + (f" --categories {' '.join(args.categories)}" if args.categories else "") + (" --posed" if args.posed else ""),
         "garments": len(ok_garments), "samples": len(ok_samples),
         "garments_dropped": {r["id"]: r["error"] for r in garments if r["status"] == "unstable"},
         "garments_failed": {r["id"]: r["error"] for r in garments if r["status"] == "failed"},
@@ -66,21 +77,22 @@ def summarise(garments: list[dict], samples: list[dict], args) -> dict:
         "samples_per_category": dict(sorted(Counter(r["category"] for r in ok_samples).items())),
         "garments_per_split": dict(Counter(r["split"] for r in ok_garments)),
         "vertices": _stats(r["vertices"] for r in ok_garments),
-        "seconds_per_garment": {stage: _stats(r[stage] for r in ok_garments) for stage in ("template_s", "crdl_s", "drape_s")}
+        "seconds_per_garment": {stage: _stats(r[stage] for r in ok_garments) for stage in stages}
         | {"wall": _stats(r["wall_seconds"] for r in ok_garments)},
         "seconds_per_sample": {"render": _stats(r["render_s"] for r in ok_samples),
                                "wall": _stats(r["wall_seconds"] for r in ok_samples)},
-        "drape_penetration": _stats(r["drape_penetration"] for r in ok_garments),
-        "drape_drop_m": _stats(r["drape_drop"] for r in ok_garments),
-        "lines_on_masks": {split: {key: _stats(r[key] for r in ok_samples if split_of[r["id"]] == split)
-                                   for key in ("line_boundary_median_px", "line_off_mask_max_px", "line_behind_body")}
-                           for split in sorted(set(split_of.values()))},
+        "garment_measures": {key: _stats(r[key] for r in ok_garments) for key in garment_keys},
+        "sample_measures": {split: {key: _stats(r[key] for r in ok_samples if split_of[r["id"]] == split)
+                                    for key in sample_keys}
+                            for split in sorted(set(split_of.values()))},
     }
 
 
 def make(args) -> int:
     from darts.templates.categories import CATEGORIES
     from sim.dataset.make import GARMENTS, make_garment, render_sample
+    from sim.dataset.posed import make_posed_garment
+    from sim.dataset.posed_sample import render_posed_sample
 
     if args.count < 1:
         raise DartsInputError(None, f"--count must be >= 1, got {args.count}")
@@ -99,9 +111,10 @@ def make(args) -> int:
     categories = list(dict.fromkeys(args.categories)) if args.categories else list(CATEGORIES)
     with ray_session(args.address, args.workers) as session:
         options = dict(workers=args.workers, retry=args.retry, session=session)
-        garments = run_jobs(garment_jobs(args.count, args.views, args.seed, categories), out / GARMENTS, make_garment,
-                            description="garments", **options)
-        samples = run_jobs(sample_jobs(garments, args.views), out, render_sample, description="samples", **options)
+        garments = run_jobs(garment_jobs(args.count, args.views, args.seed, categories), out / GARMENTS,
+                            make_posed_garment if args.posed else make_garment, description="garments", **options)
+        samples = run_jobs(sample_jobs(garments, args.views, unseen=not args.posed), out,
+                           render_posed_sample if args.posed else render_sample, description="samples", **options)
     summary = summarise(garments, samples, args)
     with atomic_path(out / SUMMARY) as tmp:
         tmp.write_text(json.dumps(summary, indent=1))
@@ -132,6 +145,9 @@ def add_parser(groups) -> None:
     parser.add_argument("--seed", type=int, default=0, help="dataset seed (default 0)")
     parser.add_argument("--views", type=int, default=2, metavar="V", help="pictures per garment (default 2)")
     parser.add_argument("--categories", nargs="+", metavar="C", help="only these categories (default: all ten)")
+    parser.add_argument("--posed", action="store_true",
+                        help="the posed dataset: each garment simulated on a shipped motion up to a random frame, with "
+                             "another garment worn with it, pictured by a free camera against clutter (docs/dataset.md)")
     parser.add_argument("--address", metavar="ADDR", help="join the Ray cluster at host:port (default: start Ray here)")
     parser.add_argument("--workers", type=int, metavar="N", help="jobs at once (default: one per core)")
     parser.add_argument("--retry", type=int, default=0, metavar="K", help="re-run a job whose worker died, up to K times")

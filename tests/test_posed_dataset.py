@@ -1,0 +1,114 @@
+"""`darts dataset make --posed`: a garment simulated on a motion and pictured by a free camera with
+the other garment worn with it; what it holds agrees with itself, and it repeats for a seed."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from darts.camera import Camera
+from darts.fileio import read_npz
+from darts.jobs import run_one
+from darts.templates.categories import CATEGORIES
+from sim.dataset.cli import garment_jobs, sample_jobs
+from sim.dataset.posed import MAX_FRAME, OTHER_GARMENT, POSED_MOTIONS, carry, make_posed_garment, posed_recipe
+from sim.dataset.posed_sample import render_posed_sample
+from sim.dataset.recipe import garment_recipe
+
+SAMPLE_FILES = {"image.png", "mask.png", "person_mask.png", "other_mask.png", "camera.json", "keypoints.npz",
+                "meta.json", "result.json"}
+
+
+def _make(out: Path, index: int) -> tuple[dict, list[dict]]:
+    job = garment_jobs(index + 1, 1, 0, list(CATEGORIES))[index]
+    row = run_one(make_posed_garment, job, out / "garments")
+    assert row["status"] == "ok", row
+    return row, [run_one(render_posed_sample, sample, out) for sample in sample_jobs([row], 1, unseen=False)]
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    out = tmp_path_factory.mktemp("posed")
+    index = next(i for i in range(100) if garment_recipe(0, i).category == "short-pants")
+    return out, index, *_make(out, index)
+
+
+def test_posed_recipes_draw_every_motion_frame_and_other_garment():
+    recipes = [posed_recipe(0, i, family) for i in range(60) for family in ("top", "pants", "dress")]
+    assert {r["motion"] for r in recipes} == set(POSED_MOTIONS)
+    assert min(r["frame"] for r in recipes) >= 0 and max(r["frame"] for r in recipes) <= MAX_FRAME
+    assert all(r["other"] in OTHER_GARMENT["top"] for r in recipes[0::3]) and all(r["other"] is None for r in recipes[2::3])
+    assert posed_recipe(0, 5, "top") == posed_recipe(0, 5, "top") != posed_recipe(1, 5, "top")
+
+
+def test_carry_keeps_a_point_on_its_triangle_at_its_height(body):
+    """Points about 1 cm off the rest body go with it: unchanged when the body does not move, shifted
+    with a translated body, and as far off it (90 % within 2 mm) when its elbow bends."""
+    rest = body.shaped(None)[0][0].double().numpy()
+    rng = np.random.default_rng(0)
+    picked = rng.choice(len(rest), 50, replace=False)
+    normals = np.zeros_like(rest)
+    tri = rest[body.faces]
+    face_normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    for k in range(3):
+        np.add.at(normals, body.faces[:, k], face_normals)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    points = rest[picked] + 0.01 * normals[picked]
+    assert np.allclose(carry(rest, rest, body.faces, points), points, atol=2e-4)
+    assert np.allclose(carry(rest, rest + [0.1, 0.2, -0.3], body.faces, points), points + [0.1, 0.2, -0.3], atol=2e-4)
+    import torch
+
+    pose = np.zeros((body.num_joints, 3))
+    pose[18] = [0, -1.2, 0]  # the left elbow bent
+    bent = body.to(torch.float64)(torch.tensor(pose)[None]).vertices[0].numpy()
+    carried = carry(rest, bent, body.faces, points)
+    from darts.geometry.distance import SurfaceDistance
+
+    before = SurfaceDistance(rest, body.faces).query(points)[0]
+    after = SurfaceDistance(bent, body.faces).query(carried)[0]
+    assert np.percentile(np.abs(after - before), 90) < 2e-3 and not np.allclose(carried, points, atol=0.01)
+
+
+def test_a_posed_sample_agrees_with_itself(made, body):
+    """The garment is worn (within 6 cm of the posed body, which has left its rest pose); its mask is
+    inside the person's and not empty; the joints the camera sees project onto the person (the
+    pelvis always), and the picture is not the background alone."""
+    out, index, row, samples = made
+    garment = read_npz(out / "garments" / f"g{index:05d}" / "posed.npz")
+    from darts.geometry.distance import SurfaceDistance
+
+    distance = SurfaceDistance(garment["body"].astype(np.float64), body.faces).query(garment["garment"].astype(np.float64))[0]
+    assert np.percentile(distance, 95) < 0.06 and distance.min() > -0.02
+    rest = body.shaped(np.asarray(garment_recipe(0, index).betas))[0][0].double().numpy()
+    assert np.abs(garment["body"] - rest).max() > 0.02
+    assert row["other"] in OTHER_GARMENT["pants"] and len(garment["other"]) > 100
+    for sample in samples:
+        assert sample["status"] == "ok", sample
+        folder = out / "/".join(sample["id"].split("-", 1))
+        assert SAMPLE_FILES <= {p.name for p in folder.iterdir()}
+        camera = Camera.from_json(folder / "camera.json")
+        read = lambda name: np.asarray(Image.open(folder / name)) > 127  # noqa: E731
+        mask, person, other = read("mask.png"), read("person_mask.png"), read("other_mask.png")
+        assert mask.shape == (camera.height, camera.width) and mask.sum() > 200 and not (mask & ~person).any()
+        assert other.sum() > 100 and (mask & other).sum() < 0.02 * mask.sum()  # both only where they tie, 2 samples of 4
+        keypoints = read_npz(folder / "keypoints.npz")
+        pixels, _ = camera.project(keypoints["joints"].astype(np.float64))
+        assert np.allclose(pixels, keypoints["joints_px"], atol=1e-3) and keypoints["in_view"][0]
+        col, row_ = np.floor(pixels[keypoints["in_view"]]).astype(int).T
+        assert person[row_, col].mean() > 0.8
+        meta = json.loads((folder / "meta.json").read_text())
+        assert meta["motion"] in POSED_MOTIONS and meta["split"] == garment_recipe(0, index).split
+        image = np.asarray(Image.open(folder / "image.png")).astype(float)
+        assert image[person].std() > 5 and image[~person].std() > 5
+
+
+def test_a_posed_sample_is_made_again_the_same(made, tmp_path):
+    out, index, _, samples = made
+    _, again = _make(tmp_path, index)
+    for first, second in zip(samples, again):
+        a, b = (root / "/".join(s["id"].split("-", 1)) for root, s in ((out, first), (tmp_path, second)))
+        for name in ("image.png", "mask.png", "person_mask.png"):
+            assert np.array_equal(np.asarray(Image.open(a / name)), np.asarray(Image.open(b / name))), name
