@@ -8,24 +8,17 @@ is recorded, the last epoch's weights are kept. Torch uses both cores (torch.set
 """
 from __future__ import annotations
 
-import argparse
 import shlex
 import sys
-from pathlib import Path
 
 import torch
 
 from darts.regress.data import load_split
-from darts.regress.train import dataset_record, save_checkpoint, train_classifier
+from darts.regress.train import dataset_record, save_checkpoint, train_classifier, training_parser
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, required=True)
-    parser.add_argument("--epochs", type=int, default=15)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", type=Path, default=Path("darts/regress/weights/classifier.pt"))
-    args = parser.parse_args()
+    args = training_parser(__doc__.splitlines()[0], 15, "darts/regress/weights/classifier.pt").parse_args()
     torch.set_num_threads(2)
     train, val = load_split(args.data, "train"), load_split(args.data, "val")
     model, history = train_classifier(train, val, args.epochs, args.seed)

@@ -10,7 +10,6 @@ minutes. The last epoch's weights are kept; the validation Chamfer of every epoc
 """
 from __future__ import annotations
 
-import argparse
 import shlex
 import sys
 from pathlib import Path
@@ -19,18 +18,14 @@ import torch
 
 from darts.regress.data import load_split
 from darts.regress.lines import VARIANTS
-from darts.regress.train import dataset_record, load_checkpoint, save_checkpoint, train_regressor
+from darts.regress.train import dataset_record, load_checkpoint, save_checkpoint, train_regressor, training_parser
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, required=True)
+    parser = training_parser(__doc__.splitlines()[0], 40, None)
     parser.add_argument("--variant", choices=VARIANTS, default="ours")
     parser.add_argument("--encoder", type=Path, default=Path("darts/regress/weights/classifier.pt"),
                         help="a classifier checkpoint whose encoder is shared, frozen ('none': train one end to end)")
-    parser.add_argument("--epochs", type=int, default=40)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     torch.set_num_threads(2)
     out = args.out or Path(f"darts/regress/weights/lines_{args.variant}.pt")

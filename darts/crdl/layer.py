@@ -135,7 +135,7 @@ class Crdl:
         multipliers = np.ones(len(handles)) if handle_weights is None else np.asarray(handle_weights, np.float64)
         self._handle_multipliers = torch.as_tensor(multipliers)[:, None]
         self.surface = surface
-        self.silhouette = None if silhouette is None else silhouette.bind(faces)
+        self.silhouette = None if silhouette is None else silhouette.bind(vertices, faces)
         count = self.system.vertex_count
         selector = sp.csr_matrix((np.ones(len(handles)), (np.arange(len(handles)), np.asarray(handles))),
                                  shape=(len(handles), count))

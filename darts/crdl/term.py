@@ -5,7 +5,12 @@ import torch
 
 
 class SilhouetteTerm:
-    """A silhouette term: ``loss(vertices)`` is L(p) (torch, differentiable in p [V,3])."""
+    """A silhouette term: ``loss(vertices)`` is L(p) (torch, differentiable in p [V,3]);
+    ``bind(vertices, faces)`` gives the term for the CRDL's mesh (its rest ``vertices`` [V,3], where
+    the solve starts, and ``faces``)."""
+
+    def bind(self, vertices, faces) -> "SilhouetteTerm":
+        raise NotImplementedError
 
     def loss(self, vertices: torch.Tensor) -> torch.Tensor:
         raise NotImplementedError

@@ -1,16 +1,19 @@
 """From one picture to a DART: classify, regress the feature lines, fit the template with the CRDL.
 
-    picture (+ mask, camera) -> category (classifier, or given)
-                             -> feature lines (regressor, from the category's F_g and the camera)
+    picture (+ mask, camera) -> without a camera: the person and the body fitted to it (darts.photo)
+                             -> category (classifier, or given)
+                             -> feature lines (regressor, from the category's F_g and the camera;
+                                on a fitted body with a mask: the template's own)
                              -> the category's template on the body, deformed by the CRDL so its
                                 lines reach the regressed ones, outside the body, and (with a mask)
                                 its silhouette matches the mask
                              -> a DART (panels, seams, springs of the template)
 
 Pictures of another size than the networks' (224 x 224) are resized for the networks; the camera's
-intrinsics are scaled with them. Without a camera, the category's default camera
-(``Camera.default``: the dataset's, level and from the front) is assumed, at the picture's size.
-Everything is in the body's canonical frame (Y up, metres).
+intrinsics are scaled with them. Without a camera, the camera fitted with the person's body when
+a mask is given and a person found, else the category's default camera (``Camera.default``: the
+dataset's, level and from the front) at the picture's size. Everything is in the body's canonical
+frame (Y up, metres).
 """
 from __future__ import annotations
 
@@ -84,6 +87,23 @@ def regress_lines(image: np.ndarray, camera: Camera, category: str, variant: str
     return {name: out[k] for k, name in enumerate(CATEGORIES[category].line_names)}
 
 
+def _person(image: np.ndarray, body, times: dict):
+    """(the person in ``image``, the body fitted to it), or (None, None) when there is none; the
+    stages' times go into ``times``."""
+    from darts.photo.fit import fit_body
+    from darts.photo.person import find_person
+
+    mark = time.perf_counter()
+    person = find_person(image)
+    times["person_s"] = time.perf_counter() - mark
+    if person is None:
+        return None, None
+    mark = time.perf_counter()
+    fit = fit_body(person, body, image.shape[1], image.shape[0])
+    times["body_fit_s"] = time.perf_counter() - mark
+    return person, fit
+
+
 @dataclass
 class Reconstruction:
     dart: object
@@ -99,13 +119,19 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     shows the CRDL's steps; ``silhouette_term``: which (``darts.crdl.SILHOUETTE_WEIGHTS``),
     at ``silhouette_weight`` (default: the term's). A picture that is too small, blurred or blank, or
     whose garment the classifier is not sure of (``darts.regress.checks``; the latter unless
-    ``accept_low_confidence``) raises ``DartsInputError`` before anything is built. A picture given
-    alone (no mask, no camera) must show a person (``darts.photo.person``), found before anything
-    else; the report carries the person's landmarks and the body fitted to them (``darts.photo.fit``:
-    pose, shape, camera), which the garment's reconstruction does not use yet."""
+    ``accept_low_confidence``) raises ``DartsInputError`` before anything is built.
+
+    Without a camera the picture is taken for a photograph: the person in it is looked for
+    (``darts.photo.person``) and the body fitted to its landmarks (``darts.photo.fit``: pose, shape,
+    camera); without a mask too, a picture with no person is refused (unless
+    ``accept_low_confidence``). With a mask and a person, the garment is fitted on that body: the
+    template on the fitted shape (unless ``betas``), its own lines kept (the regressor knows
+    rest-posed bodies only), the silhouette term seen through the fitted pose and camera
+    (``darts.crdl.posed.PosedTerm``); the report's ``camera`` is then the rest-posed body's."""
     from darts.crdl import SILHOUETTE_WEIGHTS
-    from darts.crdl.deform import deform_dart
+    from darts.crdl.deform import deform_dart, weld_garment
     from darts.crdl.layer import CrdlWeights
+    from darts.crdl.posed import PosedTerm
     from darts.crdl.silhouette import silhouette_term as make_term
     from darts.dart.build import make_dart
     from darts.regress.checks import confidence_problem, person_problem, picture_problem
@@ -114,22 +140,11 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     if problem:
         raise DartsInputError(None, f"the picture {problem}")
     times, started = {}, time.perf_counter()
-    low_confidence, classified, person, body_fit = False, category is None, None, None
-    photograph = mask is None and camera is None
-    if photograph:
-        from darts.photo.person import find_person
-
-        person = find_person(image)
-        times["person_s"] = time.perf_counter() - started
-        if person is None and not accept_low_confidence:
-            raise DartsInputError(None, f"the picture {person_problem()}")
-        low_confidence = person is None
-        if person is not None:
-            from darts.photo.fit import fit_body
-
-            mark = time.perf_counter()
-            body_fit = fit_body(person, body, image.shape[1], image.shape[0])
-            times["body_fit_s"] = time.perf_counter() - mark
+    classified, looked = category is None, camera is None
+    person, body_fit = _person(image, body, times) if looked else (None, None)
+    if looked and person is None and mask is None and not accept_low_confidence:
+        raise DartsInputError(None, f"the picture {person_problem()}")
+    low_confidence = looked and mask is None and person is None
     if classified:
         mark = time.perf_counter()
         ranked = classify_image(image, mask)
@@ -143,17 +158,28 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
         ranked, probability = [(category, 1.0)], 1.0
     height, width = image.shape[:2]
     given_camera = camera is not None
+    posed = body_fit is not None and mask is not None
+    if posed:  # the person's body, pose and camera fitted to the photograph
+        camera, betas = body_fit.camera, betas or body_fit.betas.tolist()
     # Without a camera: the dataset's, for the picture as the networks see it (stretched to a square).
     camera = camera or Camera.default(category).resized(width, height)
     if (camera.width, camera.height) != (width, height):
         raise DartsInputError(None, f"the camera is {camera.width}x{camera.height} pixels but the image is {width}x{height}")
     mark = time.perf_counter()
-    lines = regress_lines(image, camera, category)
-    times["regress_s"] = time.perf_counter() - mark
-    mark = time.perf_counter()
     template = make_dart(category, body, betas=None if not betas else np.asarray(betas), edge_length=edge_length)
     times["template_s"] = time.perf_counter() - mark
-    silhouette = None if mask is None else make_term(silhouette_term, mask, camera)
+    mark = time.perf_counter()
+    if posed:  # the regressor knows rest-posed bodies only: the template keeps its own lines
+        welded = weld_garment(template)
+        lines = {name: welded.vertices[loop] for name, loop in welded.lines.items()}
+    else:
+        lines = regress_lines(image, camera, category)
+        times["regress_s"] = time.perf_counter() - mark
+    silhouette = None
+    if mask is not None:
+        silhouette = make_term(silhouette_term, mask, body_fit.posed_camera if posed else camera)
+        if posed:
+            silhouette = PosedTerm(silhouette, body, body_fit.pose, betas)
     weight = SILHOUETTE_WEIGHTS[silhouette_term] if silhouette_weight is None else silhouette_weight
     weights = CrdlWeights(silhouette=weight if silhouette is not None else 0.0)
     mark = time.perf_counter()
@@ -163,8 +189,9 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     report = {"category": category, "probability": probability,
               "top_categories": [{"category": c, "probability": p} for c, p in ranked[:3]],
               "probabilities": dict(ranked) if classified else None, "low_confidence": low_confidence,
-              "person": None if person is None else person.as_dict(), "person_looked_for": photograph,
-              "body_fit": None if body_fit is None else body_fit.as_dict(),
+              "person": None if person is None else person.as_dict(), "person_looked_for": looked,
+              "body_fit": None if body_fit is None else body_fit.as_dict(), "posed": posed,
+              "lines_from": "template" if posed else "regressor",
               "given": {"category": not classified, "camera": given_camera, "mask": mask is not None,
                         "betas": bool(betas)},
               "camera": camera.as_dict(), "silhouette": silhouette is not None,

@@ -285,12 +285,33 @@ def dataset_record(root: str | os.PathLike) -> dict:
     return {key: summary[key] for key in ("command", "garments", "samples", "samples_per_split")}
 
 
+def training_parser(description: str, epochs: int, out: str | None):
+    """The arguments every training script takes: --data (a dataset folder), --epochs, --seed, --out."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--data", type=Path, required=True)
+    parser.add_argument("--epochs", type=int, default=epochs)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, default=None if out is None else Path(out))
+    return parser
+
+
 def save_checkpoint(path: str | os.PathLike, kind: str, model: torch.nn.Module, config: dict, record: dict) -> None:
     """Write a checkpoint (module docstring) atomically."""
     from darts.fileio import atomic_path
 
     with atomic_path(path) as tmp:
         torch.save({"kind": kind, "config": config, "state_dict": model.state_dict(), "record": record}, tmp)
+
+
+def _model_class(kind: str):
+    """The network class of a checkpoint ``kind``: classifier, lines, or garment (``darts.photo.garment_net``)."""
+    if kind == "garment":
+        from darts.photo.garment_net import GarmentNet
+
+        return GarmentNet
+    return GarmentClassifier if kind == "classifier" else FeatureLineRegressor
 
 
 def load_checkpoint(path: str | os.PathLike, kind: str) -> tuple[torch.nn.Module, dict]:
@@ -303,6 +324,6 @@ def load_checkpoint(path: str | os.PathLike, kind: str) -> tuple[torch.nn.Module
         raise DartsInputError(path, f"not a DARTs checkpoint ({type(exc).__name__})") from None
     if not isinstance(data, dict) or data.get("kind") != kind:
         raise DartsInputError(path, f"is not a {kind} checkpoint")
-    model = GarmentClassifier(**data["config"]) if kind == "classifier" else FeatureLineRegressor(**data["config"])
+    model = _model_class(kind)(**data["config"])
     model.load_state_dict(data["state_dict"])
     return model.eval(), data["record"]
