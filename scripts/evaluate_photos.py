@@ -13,16 +13,19 @@ Measures per picture (256 x 256 pixels):
   its posed vertices) projected by the true camera, over the joints in view: the median distance
   in pixels, and the same over the person mask's box height (%);
 - **category**: the classifier's top answer on the whole picture, and on the garment alone (the
-  true mask given), against the truth.
-With ``--reconstruct`` (on every ``--every``-th picture): ``darts.regress.pipeline.reconstruct``
-given the picture, the true category and the garment's true mask but no camera (the posed path: the
-body fitted to the person, the template on it fitted through the pose), against the template on
-the same fitted body without the CRDL:
+  true mask given), against the truth;
+- **garment network** (when its weights are shipped): its mask (``segment_garment`` on the crop
+  around the found person) against the true garment mask (IoU), and its category.
+With ``--reconstruct`` (on every ``--every``-th picture), ``darts.regress.pipeline.reconstruct``
+twice with no camera: "oracle", given the true category and the garment's true mask, and "photo",
+given nothing but the picture (the garment network's mask and category). Each against the
+template of its category on the same fitted body without the CRDL:
 - **garment IoU**: the garment posed by the fitted body (``PosedTerm``) and rendered through the
   fitted camera, the fitted body in front of it, against the true mask;
-- **surface Chamfer** (cm, unsquared, the two directions averaged): the rest-pose garment against
+- **surface Chamfer** and **line Chamfer** (cm, unsquared, the two directions averaged; lines:
+  each feature line resampled to 64 points, the mean over lines): the rest-pose garment against
   the true DART (``garment.npz``: the garment before the run, on the true body shape; the
-  reconstruction is on the fitted shape).
+  reconstruction is on the fitted shape), when the category is right.
 Times are CPU seconds of each stage (``time.process_time``), one core.
 """
 from __future__ import annotations
@@ -35,16 +38,20 @@ from pathlib import Path
 import numpy as np
 
 
-def garment_measures(image: np.ndarray, mask: np.ndarray, meta: dict, folder: Path, body) -> dict:
-    """The posed path's garment against the template on the same fitted body (module docstring)."""
+def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.ndarray, category: str | None,
+                     folder: Path, body) -> dict:
+    """The posed path's garment (given ``mask`` and ``category``, or None: estimated) against the
+    template on the same fitted body, both measured against ``truth_mask`` (module docstring)."""
     import torch
 
     from darts.crdl.deform import weld_garment
     from darts.crdl.outline import Outline
+    from darts.errors import DartsInputError
     from darts.crdl.posed import PosedTerm
     from darts.dart.build import make_dart
     from darts.dart.io import load_dart
     from darts.geometry.distance import SurfaceDistance
+    from darts.geometry.loops import LINE_POINTS, resample_loop
     from darts.photo.fit import FLIP
     from darts.camera import Camera
     from darts.raycast import cast
@@ -52,11 +59,15 @@ def garment_measures(image: np.ndarray, mask: np.ndarray, meta: dict, folder: Pa
     from darts.templates.defaults import DATASET_EDGE_LENGTH
 
     start = time.process_time()
-    result = reconstruct(image, body, meta["category"], None, mask, edge_length=DATASET_EDGE_LENGTH)
+    try:
+        result = reconstruct(image, body, category, None, mask, edge_length=DATASET_EDGE_LENGTH)
+    except DartsInputError as error:
+        return {"reconstruct_s": time.process_time() - start, "posed": False, "refused": error.problem}
     seconds = time.process_time() - start
     fit = result.report["body_fit"]
     if not result.report["posed"]:
         return {"reconstruct_s": seconds, "posed": False}
+    mask = truth_mask
     pose, betas = np.asarray(fit["pose_axis_angle"]), np.asarray(fit["betas"])
     camera = Camera.from_dict(result.report["camera"])
     posed_camera = Camera(camera.width, camera.height, camera.fx, camera.fy, camera.cx, camera.cy, FLIP,
@@ -66,7 +77,22 @@ def garment_measures(image: np.ndarray, mask: np.ndarray, meta: dict, folder: Pa
     truth = load_dart(Path(folder).parent.parent / json.loads((folder / "meta.json").read_text())["garment_folder"] / "garment.npz")
     truth_vertices = np.asarray(truth.vertices, np.float64)
 
-    def measures(dart) -> tuple[float, float]:
+    def lines_of(dart) -> dict[str, np.ndarray]:
+        vertices = np.asarray(dart.vertices, np.float64)
+        return {name: resample_loop(vertices[np.asarray(loop)], LINE_POINTS, vertices.mean(0)) for name, loop in dart.lines.items()}
+
+    truth_lines = lines_of(truth)
+
+    def line_chamfer(dart) -> float | None:
+        if dart.category != truth.category:
+            return None
+        errors = []
+        for name, points in lines_of(dart).items():
+            d = np.linalg.norm(points[:, None] - truth_lines[name][None], axis=2)
+            errors.append(50 * (d.min(1).mean() + d.min(0).mean()))
+        return float(np.mean(errors))
+
+    def measures(dart) -> tuple[float, float, float | None]:
         mesh = weld_garment(dart)
         posing = PosedTerm(Outline(mask, posed_camera), body, pose, betas).bind(mesh.vertices, mesh.faces)
         posed = posing.posed(torch.as_tensor(mesh.vertices)).numpy()
@@ -75,12 +101,13 @@ def garment_measures(image: np.ndarray, mask: np.ndarray, meta: dict, folder: Pa
         vertices = np.asarray(dart.vertices, np.float64)
         to_truth = np.abs(SurfaceDistance(truth_vertices, truth.faces).query(vertices, winding=False)[0]).mean()
         from_truth = np.abs(SurfaceDistance(vertices, dart.faces).query(truth_vertices, winding=False)[0]).mean()
-        return iou, float(50 * (to_truth + from_truth))
+        return iou, float(50 * (to_truth + from_truth)), line_chamfer(dart)
 
-    template = make_dart(meta["category"], body, betas=betas, edge_length=DATASET_EDGE_LENGTH)
-    (iou, chamfer), (template_iou, template_chamfer) = measures(result.dart), measures(template)
-    return {"reconstruct_s": seconds, "posed": True, "garment_iou": iou, "template_iou": template_iou,
-            "surface_chamfer_cm": chamfer, "template_chamfer_cm": template_chamfer}
+    template = make_dart(result.report["category"], body, betas=betas, edge_length=DATASET_EDGE_LENGTH)
+    (iou, chamfer, lines), (template_iou, template_chamfer, template_lines) = measures(result.dart), measures(template)
+    return {"reconstruct_s": seconds, "posed": True, "category": result.report["category"], "garment_iou": iou,
+            "template_iou": template_iou, "surface_chamfer_cm": chamfer, "template_chamfer_cm": template_chamfer,
+            "line_chamfer_cm": lines, "template_line_chamfer_cm": template_lines}
 
 
 def main() -> None:
@@ -101,6 +128,9 @@ def main() -> None:
     from darts.regress.pipeline import classify_image
 
     torch.set_num_threads(1)
+    from darts.photo.garment_net import WEIGHTS
+
+    network = WEIGHTS.is_file()
     body = load_body(None)
     model = body.to(torch.float64)
     folders = sorted(p.parent for p in args.data.glob("*/g*-*/image.png"))[::args.every]
@@ -138,8 +168,20 @@ def main() -> None:
             height = float(rows_.max() - rows_.min() + 1) if len(rows_) else float(image.shape[0])
             row["joint_error_px"] = float(np.median(error))
             row["joint_error_pct_height"] = 100 * float(np.median(error)) / height
+            if network:
+                from darts.photo.garment_net import segment_garment
+
+                start = time.process_time()
+                estimated, ranked = segment_garment(image, person.mask)
+                row["garment_s"] = time.process_time() - start
+                row["garment_mask_iou"] = float((estimated & garment_mask).sum() / max((estimated | garment_mask).sum(), 1))
+                row["garment_network_category"] = ranked[0][0]
             if args.reconstruct:
-                row.update(garment_measures(image, garment_mask, meta, folder, body))
+                oracle = garment_measures(image, garment_mask, garment_mask, meta["category"], folder, body)
+                row.update({f"oracle_{k}": v for k, v in oracle.items()})
+                if network:
+                    photo = garment_measures(image, None, garment_mask, None, folder, body)
+                    row.update({f"photo_{k}": v for k, v in photo.items()})
         rows.append(row)
         print(json.dumps(row), flush=True)
     found = [r for r in rows if r["found"]]
@@ -153,14 +195,25 @@ def main() -> None:
         "found_per_category": {c: f"{sum(r['found'] for r in rows if r['category'] == c)}/{sum(r['category'] == c for r in rows)}"
                                for c in sorted({r["category"] for r in rows})},
         "seconds_median": {k: float(np.median([r[k] for r in rows if k in r]))
-                           for k in ("person_s", "body_fit_s", "classify_s", "reconstruct_s") if any(k in r for r in rows)},
+                           for k in ("person_s", "body_fit_s", "classify_s", "garment_s", "oracle_reconstruct_s",
+                                     "photo_reconstruct_s") if any(k in r for r in rows)},
     }
-    posed = [r for r in rows if r.get("posed")]
-    if posed:
-        summary["reconstructed"] = len(posed)
-        summary.update({f"{k}_median": float(np.median([r[k] for r in posed]))
-                        for k in ("garment_iou", "template_iou", "surface_chamfer_cm", "template_chamfer_cm")})
-        summary["garment_iou_better"] = int(sum(r["garment_iou"] > r["template_iou"] for r in posed))
+    if network:
+        summary["garment_network"] = {
+            "mask_iou_median": float(np.median([r["garment_mask_iou"] for r in found])),
+            "category_accuracy": float(np.mean([r.get("garment_network_category") == r["category"] for r in rows]))}
+    for kind in ("oracle", "photo"):
+        posed = [r for r in rows if r.get(f"{kind}_posed")]
+        if posed:
+            right = [r for r in posed if r[f"{kind}_category"] == r["category"]]
+            summary[kind] = {"reconstructed": len(posed), "category_right": len(right),
+                             "refused": sum(f"{kind}_refused" in r for r in rows),
+                             **{f"{k}_median": float(np.median([r[f"{kind}_{k}"] for r in posed]))
+                                for k in ("garment_iou", "template_iou")},
+                             **{f"{k}_median_category_right": float(np.median([r[f"{kind}_{k}"] for r in right])) if right else None
+                                for k in ("surface_chamfer_cm", "template_chamfer_cm", "line_chamfer_cm",
+                                          "template_line_chamfer_cm")},
+                             "garment_iou_better": int(sum(r[f"{kind}_garment_iou"] > r[f"{kind}_template_iou"] for r in posed))}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"summary": summary, "pictures": rows}, indent=1))
     print(json.dumps(summary, indent=1))

@@ -14,7 +14,8 @@ import sys
 import torch
 
 from darts.regress.data import load_split
-from darts.regress.train import dataset_record, save_checkpoint, train_classifier, training_parser
+from darts.checkpoint import save_checkpoint
+from darts.regress.train import dataset_record, train_classifier, training_parser
 
 
 def main() -> None:

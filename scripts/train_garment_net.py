@@ -65,7 +65,8 @@ def mask_iou(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
 def main() -> None:
     from darts.photo.garment_net import GarmentNet
     from darts.regress.data import CATEGORY_IDS
-    from darts.regress.train import save_checkpoint, training_parser
+    from darts.checkpoint import save_checkpoint
+    from darts.regress.train import training_parser
 
     args = training_parser(__doc__.splitlines()[0], 15, "darts/photo/weights/garment_net.pt").parse_args()
 

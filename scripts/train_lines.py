@@ -18,7 +18,8 @@ import torch
 
 from darts.regress.data import load_split
 from darts.regress.lines import VARIANTS
-from darts.regress.train import dataset_record, load_checkpoint, save_checkpoint, train_regressor, training_parser
+from darts.checkpoint import save_checkpoint
+from darts.regress.train import dataset_record, load_checkpoint, train_regressor, training_parser
 
 
 def main() -> None:

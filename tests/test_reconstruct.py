@@ -145,8 +145,9 @@ def test_bad_reconstruct_input_is_one_line_exit_2_and_no_output(case, problem, t
 
 
 def test_a_low_confidence_answer_only_when_asked_and_the_report_says_what_was_given(run_darts, tmp_path):
-    """The portrait (sleeveless top at 44 %) goes through with --accept-low-confidence, and the report
-    carries every category's probability, low_confidence and what was given (nothing but the picture)."""
+    """The portrait (under 50 % for the garment network) goes through with --accept-low-confidence,
+    and the report carries every category's probability, low_confidence, what was given (nothing but
+    the picture) and what was estimated (the person's body, the garment's mask and category)."""
     out, report = tmp_path / "garment.npz", tmp_path / "report.json"
     code, stdout, err = run_darts("reconstruct", PORTRAIT, "-o", out, "--report", report, "--accept-low-confidence",
                                   "--edge-length", "0.05")
@@ -155,6 +156,7 @@ def test_a_low_confidence_answer_only_when_asked_and_the_report_says_what_was_gi
     assert data["low_confidence"] and data["probability"] < 0.5 and len(data["probabilities"]) == len(CATEGORIES)
     assert sum(data["probabilities"].values()) == pytest.approx(1.0, abs=1e-4)
     assert data["given"] == {"category": False, "camera": False, "mask": False, "betas": False}
+    assert data["posed"] and data["mask_estimated"] and data["category_from"] == "garment network"
     assert (data["camera"]["width"], data["camera"]["height"]) == (512, 600) and load_dart(out).category == data["category"]
 
 

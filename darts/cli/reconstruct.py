@@ -39,9 +39,9 @@ def reconstruct(args) -> int:
     result = api.reconstruct(args.image, args.category, args.camera, args.mask, args.body, args.betas, args.edge_length,
                              progress=True, silhouette=args.silhouette, silhouette_weight=args.silhouette_weight,
                              accept_low_confidence=args.accept_low_confidence)
-    if args.mask is None:
-        result.report["note"] = ("no --mask: the CRDL fitted the regressed lines only, without its silhouette term; "
-                                 "give the garment's mask (white = garment, the image's size) from any segmenter to use it")
+    if not result.report["silhouette"]:
+        result.report["note"] = ("no mask given or estimated: the CRDL fitted the regressed lines only, without its "
+                                 "silhouette term; give the garment's mask (white = garment, the image's size) to use it")
     api.save_garment(result.dart, args.output)
     if args.report:
         with atomic_path(args.report) as tmp:
@@ -49,7 +49,8 @@ def reconstruct(args) -> int:
     report = result.report
     print(f"{report['category']} ({100 * report['probability']:.1f} %): wrote {args.output}, {report['vertices']} vertices, "
           f"lines fitted to {1e3 * report['crdl']['handle_rmse']:.2f} mm, {100 * report['crdl']['penetration']:.2f} % inside "
-          f"the body, {report['times']['total_s']:.1f} s" + ("" if args.mask is not None else " (no mask: no silhouette term)")
+          f"the body, {report['times']['total_s']:.1f} s" + ("" if report["silhouette"] else " (no mask: no silhouette term)")
+          + (" (garment mask estimated on the fitted body)" if report["mask_estimated"] else "")
           + (" (low confidence, accepted)" if report["low_confidence"] else ""))
     if args.simulate:
         command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]

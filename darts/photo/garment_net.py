@@ -95,13 +95,13 @@ def person_crop(person_mask: np.ndarray) -> Crop | None:
 
 @lru_cache(maxsize=1)
 def shipped_net() -> tuple[GarmentNet, dict]:
-    """The shipped network (eval mode) and its record (``darts.regress.train`` checkpoint, kind "garment")."""
+    """The shipped network (eval mode) and its record (``darts.checkpoint``, kind "garment")."""
+    from darts.checkpoint import load_model
     from darts.errors import DartsInputError
-    from darts.regress.train import load_checkpoint
 
     if not WEIGHTS.is_file():
         raise DartsInputError(WEIGHTS, "the shipped weights are missing (train them: scripts/train_garment_net.py)")
-    return load_checkpoint(WEIGHTS, "garment")
+    return load_model(WEIGHTS, "garment", GarmentNet)
 
 
 @torch.no_grad()

@@ -40,19 +40,25 @@ def sharpness(image: np.ndarray) -> float:
     return float(ndimage.laplace(np.asarray(grey, np.float64) / 255.0).var())
 
 
+def garment_problem(mask: np.ndarray) -> str | None:
+    """Why a garment ``mask`` [H,W] bool is too small to reconstruct ("empty", or how far it
+    spans), or None."""
+    rows, cols = np.nonzero(mask)
+    if len(rows) == 0:
+        return "empty"
+    extent = max(rows.max() - rows.min() + 1, cols.max() - cols.min() + 1)
+    return f"spans {extent} pixels: too small (at least {MIN_GARMENT})" if extent < MIN_GARMENT else None
+
+
 def picture_problem(image: np.ndarray, mask: np.ndarray | None) -> str | None:
     """Why ``image`` [H,W,3] (with its garment ``mask`` [H,W] bool, if any) cannot be reconstructed,
     or None: too small, too blurred or blank (module docstring)."""
     height, width = image.shape[:2]
     if min(height, width) < MIN_PICTURE:
         return f"is {width}x{height} pixels: too small (at least {MIN_PICTURE} on each side)"
-    if mask is not None:
-        rows, cols = np.nonzero(mask)
-        if len(rows) == 0:
-            return "its mask is empty: no garment to reconstruct"
-        extent = max(rows.max() - rows.min() + 1, cols.max() - cols.min() + 1)
-        if extent < MIN_GARMENT:
-            return f"the garment in its mask spans {extent} pixels: too small (at least {MIN_GARMENT})"
+    problem = None if mask is None else garment_problem(mask)
+    if problem:
+        return "its mask is empty: no garment to reconstruct" if problem == "empty" else f"the garment in its mask {problem}"
     value = sharpness(image)
     if value < MIN_SHARPNESS:
         return (f"is too blurred or blank to read a garment from (sharpness {value:.2g}, at least {MIN_SHARPNESS:g}: "

@@ -134,7 +134,7 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     from darts.crdl.posed import PosedTerm
     from darts.crdl.silhouette import silhouette_term as make_term
     from darts.dart.build import make_dart
-    from darts.regress.checks import confidence_problem, person_problem, picture_problem
+    from darts.regress.checks import confidence_problem, garment_problem, person_problem, picture_problem
 
     problem = picture_problem(image, mask)
     if problem:
@@ -145,11 +145,26 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     if looked and person is None and mask is None and not accept_low_confidence:
         raise DartsInputError(None, f"the picture {person_problem()}")
     low_confidence = looked and mask is None and person is None
+    given_mask, garment_ranked = mask is not None, None
+    if person is not None and mask is None:  # a photograph given alone: the garment network
+        from darts.photo.garment_net import segment_garment
+
+        mark = time.perf_counter()
+        mask, garment_ranked = segment_garment(image, person.mask)
+        times["garment_s"] = time.perf_counter() - mark
+        problem = garment_problem(mask)
+        if problem and not accept_low_confidence:
+            found = "no garment" if problem == "empty" else f"a garment that {problem}"
+            raise DartsInputError(None, f"the picture shows a person but the garment network finds {found} on them; "
+                                        "give --mask, or --accept-low-confidence to go on")
+        if problem:
+            mask, low_confidence = None, True
     if classified:
         mark = time.perf_counter()
-        ranked = classify_image(image, mask)
+        ranked = garment_ranked or classify_image(image, mask)
         category, probability = ranked[0]
-        times["classify_s"] = time.perf_counter() - mark
+        if garment_ranked is None:
+            times["classify_s"] = time.perf_counter() - mark
         problem = confidence_problem(ranked)
         if problem and not accept_low_confidence:
             raise DartsInputError(None, f"the picture {problem}")
@@ -157,7 +172,7 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     else:
         ranked, probability = [(category, 1.0)], 1.0
     height, width = image.shape[:2]
-    given_camera = camera is not None
+    given_camera, given_betas = camera is not None, bool(betas)
     posed = body_fit is not None and mask is not None
     if posed:  # the person's body, pose and camera fitted to the photograph
         camera, betas = body_fit.camera, betas or body_fit.betas.tolist()
@@ -192,8 +207,10 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
               "person": None if person is None else person.as_dict(), "person_looked_for": looked,
               "body_fit": None if body_fit is None else body_fit.as_dict(), "posed": posed,
               "lines_from": "template" if posed else "regressor",
-              "given": {"category": not classified, "camera": given_camera, "mask": mask is not None,
-                        "betas": bool(betas)},
+              "given": {"category": not classified, "camera": given_camera, "mask": given_mask,
+                        "betas": given_betas},
+              "category_from": None if not classified else "garment network" if garment_ranked else "classifier",
+              "mask_estimated": mask is not None and not given_mask,
               "camera": camera.as_dict(), "silhouette": silhouette is not None,
               "lines": {name: points.round(5).tolist() for name, points in lines.items()},
               "crdl": {k: v for k, v in crdl.items() if k != "objective_history"},

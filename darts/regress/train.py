@@ -18,9 +18,8 @@ GARMENT_ONLY of its training pictures show only the garment's pixels on NEUTRAL 
 test_unseen given the masks (75 % without), its errors the sleeves of far dresses and short pants
 seen close up; the wider zooms, mirrors and grey pictures came after that.
 
-A checkpoint (``torch.save``) holds ``kind`` ("classifier" or "lines"), ``config`` (the
-constructor's arguments), ``state_dict`` and ``record``: the command, seed, dataset recipe and the
-numbers it reached. It loads with ``weights_only=True``: no code runs from a checkpoint.
+Checkpoints are ``darts.checkpoint``'s, of kind "classifier" or "lines": the constructor's
+arguments, the weights and the record (command, seed, dataset recipe, the numbers it reached).
 """
 from __future__ import annotations
 
@@ -35,7 +34,8 @@ import numpy as np
 import torch
 from torch.nn import functional
 
-from darts.errors import DartsInputError
+from darts.checkpoint import load_model
+
 from darts.regress.classifier import GarmentClassifier
 from darts.regress.data import Samples
 from darts.regress.lines import FeatureLineRegressor
@@ -297,33 +297,6 @@ def training_parser(description: str, epochs: int, out: str | None):
     return parser
 
 
-def save_checkpoint(path: str | os.PathLike, kind: str, model: torch.nn.Module, config: dict, record: dict) -> None:
-    """Write a checkpoint (module docstring) atomically."""
-    from darts.fileio import atomic_path
-
-    with atomic_path(path) as tmp:
-        torch.save({"kind": kind, "config": config, "state_dict": model.state_dict(), "record": record}, tmp)
-
-
-def _model_class(kind: str):
-    """The network class of a checkpoint ``kind``: classifier, lines, or garment (``darts.photo.garment_net``)."""
-    if kind == "garment":
-        from darts.photo.garment_net import GarmentNet
-
-        return GarmentNet
-    return GarmentClassifier if kind == "classifier" else FeatureLineRegressor
-
-
 def load_checkpoint(path: str | os.PathLike, kind: str) -> tuple[torch.nn.Module, dict]:
-    """(the model in eval mode, its record) from a checkpoint of ``kind``."""
-    try:
-        data = torch.load(Path(path), map_location="cpu", weights_only=True)
-    except FileNotFoundError:
-        raise DartsInputError(path, "no such file") from None
-    except Exception as exc:  # noqa: BLE001 - any unreadable checkpoint is bad input
-        raise DartsInputError(path, f"not a DARTs checkpoint ({type(exc).__name__})") from None
-    if not isinstance(data, dict) or data.get("kind") != kind:
-        raise DartsInputError(path, f"is not a {kind} checkpoint")
-    model = _model_class(kind)(**data["config"])
-    model.load_state_dict(data["state_dict"])
-    return model.eval(), data["record"]
+    """(the model in eval mode, its record) from a checkpoint of ``kind``: classifier or lines."""
+    return load_model(path, kind, GarmentClassifier if kind == "classifier" else FeatureLineRegressor)
