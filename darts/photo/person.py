@@ -27,7 +27,7 @@ MODELS = Path(__file__).parent / "models"
 CROP = 256
 #: The landmark model's "a person is in the region" probability must reach this. Measured: three
 #: real photographs 0.93-1.00, the dataset's renders of tops and dresses 0.83-1.00; a retina's fundus
-#: photograph (skimage's ``retina``), the only one of 15 pictures without a person that the
+#: photograph (skimage's ``retina``), the only one of 12 pictures without a person that the
 #: detector took for one, 0.54. (MediaPipe's own default is 0.5.)
 MIN_PRESENCE = 0.8
 #: MediaPipe Pose's 33 landmarks, in its order.
@@ -48,7 +48,6 @@ class Person:
     region: Region
     presence: float  # 0..1
     landmarks: np.ndarray  # [33,2] picture pixels
-    depth: np.ndarray  # [33] relative depth, in picture pixels (smaller: nearer the camera)
     visibility: np.ndarray  # [33] 0..1
     world: np.ndarray  # [33,3] metres about the hips' middle (x right, y down, z away)
     mask: np.ndarray  # [H,W] float 0..1: the person
@@ -122,7 +121,7 @@ def person_in(image: np.ndarray, detection: Detection) -> Person:
     world = out["Identity_4"].reshape(-1, 3)[:len(LANDMARKS)].astype(np.float64)
     world[:, :2] = world[:, :2] @ np.array([[c, s], [-s, c]])  # turned as the picture is
     return Person(detection, region, float(np.ravel(out["Identity_1"])[0]), landmarks,
-                  raw[:, 2].astype(np.float64) * region.side / CROP, expit(raw[:, 3].astype(np.float64)), world,
+                  expit(raw[:, 3].astype(np.float64)), world,
                   _mask_in_picture(expit(out["Identity_2"][..., 0]), region, image.shape[1], image.shape[0]))
 
 
