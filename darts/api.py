@@ -177,8 +177,8 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     ``category``), feature-line regressor, CRDL (with the silhouette term ``silhouette``, at
     ``silhouette_weight`` (default: the term's, ``darts.crdl.SILHOUETTE_WEIGHTS``), when ``mask`` is given).
     ``camera``: a ``Camera`` or camera.json (default: the dataset's camera of the category). Returns
-    a ``Reconstruction``: ``.dart`` and ``.report`` (category, probabilities, lines, CRDL numbers,
-    seconds per stage). A picture too small, blurred or blank, or whose garment the classifier is not
+    a ``Reconstruction``: ``.dart``, ``.report`` (category, probabilities, lines, CRDL numbers,
+    seconds per stage) and ``.mask`` (the garment mask the silhouette term used). A picture too small, blurred or blank, or whose garment the classifier is not
     sure of, or given alone (no mask, no camera) without a person in it (``darts.photo``; these two
     unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``)."""
     from darts.camera import Camera

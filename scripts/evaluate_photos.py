@@ -20,7 +20,7 @@ With ``--reconstruct`` (on every ``--every``-th picture), ``darts.regress.pipeli
 twice with no camera: "oracle", given the true category and the garment's true mask, and "photo",
 given nothing but the picture (the garment network's mask and category). Each against the
 template of its category on the same fitted body without the CRDL:
-- **garment IoU**: the garment posed by the fitted body (``PosedTerm``) and rendered through the
+- **garment IoU**: the garment posed by the fitted body (``darts.crdl.posed.Posing``) and rendered through the
   fitted camera, the fitted body in front of it, against the true mask;
 - **surface Chamfer** and **line Chamfer** (cm, unsquared, the two directions averaged; lines:
   each feature line resampled to 64 points, the mean over lines): the rest-pose garment against
@@ -44,19 +44,17 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
     template on the same fitted body, both measured against ``truth_mask`` (module docstring)."""
     import torch
 
+    from darts.camera import Camera
     from darts.crdl.deform import weld_garment
-    from darts.crdl.outline import Outline
-    from darts.errors import DartsInputError
-    from darts.crdl.posed import PosedTerm
+    from darts.crdl.posed import Posing
     from darts.dart.build import make_dart
     from darts.dart.io import load_dart
+    from darts.errors import DartsInputError
     from darts.geometry.distance import SurfaceDistance
-    from darts.geometry.loops import LINE_POINTS, resample_loop
-    from darts.photo.fit import FLIP
-    from darts.camera import Camera
     from darts.raycast import cast
     from darts.regress.pipeline import reconstruct
     from darts.templates.defaults import DATASET_EDGE_LENGTH
+    from sim.dataset.make import draped_lines
 
     start = time.process_time()
     try:
@@ -69,17 +67,14 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
         return {"reconstruct_s": seconds, "posed": False}
     mask = truth_mask
     pose, betas = np.asarray(fit["pose_axis_angle"]), np.asarray(fit["betas"])
-    camera = Camera.from_dict(result.report["camera"])
-    posed_camera = Camera(camera.width, camera.height, camera.fx, camera.fy, camera.cx, camera.cy, FLIP,
-                          np.asarray(fit["translation_m"]))
+    posed_camera = Camera.from_dict(fit["posed_camera"])
     model = body.to(torch.float64)
     fitted_body = model(torch.tensor(pose)[None], torch.tensor(betas)[None]).vertices[0].numpy()
     truth = load_dart(Path(folder).parent.parent / json.loads((folder / "meta.json").read_text())["garment_folder"] / "garment.npz")
     truth_vertices = np.asarray(truth.vertices, np.float64)
 
     def lines_of(dart) -> dict[str, np.ndarray]:
-        vertices = np.asarray(dart.vertices, np.float64)
-        return {name: resample_loop(vertices[np.asarray(loop)], LINE_POINTS, vertices.mean(0)) for name, loop in dart.lines.items()}
+        return draped_lines(dart, np.asarray(dart.vertices, np.float64))
 
     truth_lines = lines_of(truth)
 
@@ -94,8 +89,7 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
 
     def measures(dart) -> tuple[float, float, float | None]:
         mesh = weld_garment(dart)
-        posing = PosedTerm(Outline(mask, posed_camera), body, pose, betas).bind(mesh.vertices, mesh.faces)
-        posed = posing.posed(torch.as_tensor(mesh.vertices)).numpy()
+        posed = Posing.of(body, pose, betas, mesh.vertices)(torch.as_tensor(mesh.vertices)).numpy()
         render = cast(posed_camera, [(fitted_body, body.faces), (posed, mesh.faces)], 1).which.reshape(mask.shape) == 1
         iou = float((render & mask).sum() / max((render | mask).sum(), 1))
         vertices = np.asarray(dart.vertices, np.float64)

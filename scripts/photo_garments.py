@@ -6,7 +6,7 @@ worn by it, seen by the fitted camera.
 
 The photographs are those of ``scripts/photo_people.py``. Each row: the photograph with the
 estimated garment mask (green); the fitted body wearing the reconstructed garment (posed by the
-body's skinning, ``darts.crdl.posed.PosedTerm``), rendered through the fitted camera over the
+body's skinning, ``darts.crdl.posed.Posing``), rendered through the fitted camera over the
 photograph; the garment in the rest pose. ``--accept-low-confidence`` is on (the report says when
 it was needed). Times are CPU seconds (``time.process_time``) of ``reconstruct``, one core.
 """
@@ -34,11 +34,7 @@ def main() -> None:
     from darts.body.io import load_body
     from darts.camera import Camera
     from darts.crdl.deform import weld_garment
-    from darts.crdl.outline import Outline
-    from darts.crdl.posed import PosedTerm
-    from darts.photo.fit import FLIP
-    from darts.photo.garment_net import segment_garment
-    from darts.photo.person import find_person
+    from darts.crdl.posed import Posing
     from darts.photo.synthetic import posed_body, render_person
     from darts.regress.pipeline import reconstruct
     from darts.raycast import cast
@@ -59,15 +55,12 @@ def main() -> None:
         result = reconstruct(image, body, accept_low_confidence=True)
         seconds = time.process_time() - start
         report = result.report
-        person = find_person(image)
-        mask, _ = segment_garment(image, person.mask)
+        mask = result.mask if result.mask is not None else np.zeros(image.shape[:2], bool)
         fit = report["body_fit"]
         pose, betas = np.asarray(fit["pose_axis_angle"]), np.asarray(fit["betas"])
-        rest = Camera.from_dict(report["camera"])
-        camera = Camera(rest.width, rest.height, rest.fx, rest.fy, rest.cx, rest.cy, FLIP, np.asarray(fit["translation_m"]))
+        camera = Camera.from_dict(fit["posed_camera"])
         mesh = weld_garment(result.dart)
-        posing = PosedTerm(Outline(mask, camera), body, pose, betas).bind(mesh.vertices, mesh.faces)
-        worn = posing.posed(torch.as_tensor(mesh.vertices)).numpy()
+        worn = Posing.of(body, pose, betas, mesh.vertices)(torch.as_tensor(mesh.vertices)).numpy()
         vertices, _, _ = posed_body(body, pose, betas)
         picture = render_person(camera, vertices, body.faces, [(worn, mesh.faces)], samples=1)
         covered = cast(camera, [(vertices, body.faces), (worn, mesh.faces)], 1).which.reshape(image.shape[:2]) >= 0

@@ -295,7 +295,7 @@ def test_posed_term_fits_the_garment_seen_on_a_posed_body(body, coarse_skirt):
     render; measured 0.060 vs 0.093) and comes closer to the widened skirt in the rest pose (1.73
     vs 1.94 cm mean vertex error); the same term ignoring the pose does worse than the lines alone
     (0.166, 3.23 cm)."""
-    from darts.crdl.posed import PosedTerm
+    from darts.crdl.posed import PosedTerm, Posing
     from darts.raycast import cast
 
     garment = weld_garment(coarse_skirt)
@@ -304,8 +304,8 @@ def test_posed_term_fits_the_garment_seen_on_a_posed_body(body, coarse_skirt):
     pose[0], pose[1], pose[2] = [0, 0.5, 0], [-0.5, 0, 0.1], [0.2, 0, -0.1]
     wider, _ = deform_dart(coarse_skirt, body, edit_targets("long-skirt", garment.vertices, garment.lines,
                                                             [("hem_width", 0.08)]), clearance=0.006)
-    posing = PosedTerm(Outline(np.ones((64, 64), bool), camera), body, pose).bind(garment.vertices, garment.faces)
-    seen = lambda dart: cast(camera, [(posing.posed(torch.as_tensor(weld_garment(dart).vertices)).numpy(), garment.faces)],  # noqa: E731
+    posing = Posing.of(body, pose, None, garment.vertices)
+    seen = lambda dart: cast(camera, [(posing(torch.as_tensor(weld_garment(dart).vertices)).numpy(), garment.faces)],  # noqa: E731
                              1).which.reshape(64, 64) == 0
     mask = seen(wider)
     miss = lambda dart: 1 - (seen(dart) & mask).sum() / (seen(dart) | mask).sum()  # noqa: E731

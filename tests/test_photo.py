@@ -186,8 +186,7 @@ def test_a_garment_on_a_posed_person_is_fitted_through_the_pose():
     from darts.body.io import load_body
     from darts.camera import Camera
     from darts.crdl.deform import deform_dart, weld_garment
-    from darts.crdl.outline import Outline
-    from darts.crdl.posed import PosedTerm
+    from darts.crdl.posed import Posing
     from darts.crdl.targets import edit_targets
     from darts.dart.build import make_dart
     from darts.raycast import cast
@@ -201,26 +200,21 @@ def test_a_garment_on_a_posed_person_is_fitted_through_the_pose():
     welded = weld_garment(template)
     wider, _ = deform_dart(template, body, edit_targets("short-sleeve-top", welded.vertices, welded.lines,
                                                        [("hem_width", 0.04)]), clearance=0.006)
-    posing = PosedTerm(Outline(np.ones((256, 256), bool), camera), body, pose).bind(welded.vertices, welded.faces)
-    worn = posing.posed(torch.as_tensor(weld_garment(wider).vertices)).numpy()
+    worn = Posing.of(body, pose, None, welded.vertices)(torch.as_tensor(weld_garment(wider).vertices)).numpy()
     picture, _ = _render_body(body, pose, np.zeros(body.num_betas), camera, [(worn, welded.faces)])
     mask = cast(camera, [(body.to(torch.float64)(torch.tensor(pose)[None]).vertices[0].numpy(), body.faces),
                          (worn, welded.faces)], 1).which.reshape(256, 256) == 1
     result = reconstruct(picture, body, "short-sleeve-top", None, mask, edge_length=0.04)
     report = result.report
     assert report["posed"] and report["lines_from"] == "template" and report["body_fit"]["landmark_error_px"] < 5
-    fitted = Camera.from_dict(report["camera"])
     fit_pose = np.asarray(report["body_fit"]["pose_axis_angle"])
     betas = np.asarray(report["body_fit"]["betas"])
-    from darts.photo.fit import FLIP
-
-    posed_camera = Camera(256, 256, fitted.fx, fitted.fy, fitted.cx, fitted.cy, FLIP,
-                          np.asarray(report["body_fit"]["translation_m"]))
+    posed_camera = Camera.from_dict(report["body_fit"]["posed_camera"])
+    assert np.array_equal(result.mask, mask)
 
     def iou(dart) -> float:
         mesh = weld_garment(dart)
-        seen = PosedTerm(Outline(mask, camera), body, fit_pose, betas).bind(mesh.vertices, mesh.faces)
-        vertices = seen.posed(torch.as_tensor(mesh.vertices)).numpy()
+        vertices = Posing.of(body, fit_pose, betas, mesh.vertices)(torch.as_tensor(mesh.vertices)).numpy()
         render = cast(posed_camera, [(vertices, mesh.faces)], 1).which.reshape(256, 256) == 0
         return float((render & mask).sum() / (render | mask).sum())
 

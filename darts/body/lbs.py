@@ -61,13 +61,19 @@ def forward_kinematics(
     return transforms, transforms[..., :3, 3]
 
 
-def skinning(vertices: torch.Tensor, weights: torch.Tensor, transforms: torch.Tensor, rest_joints: torch.Tensor) -> torch.Tensor:
-    """LBS: v' = sum_j w_j G_j [v - J_j; 1]. vertices [B, V, 3], weights [V, J], transforms [B, J, 4, 4]."""
+def blended_transforms(weights: torch.Tensor, transforms: torch.Tensor,
+                       rest_joints: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Each vertex's affine rest-to-posed map (M [B, V, 3, 3], c [B, V, 3]): sum_j w_j A_j with
+    A_j = G_j [I | -J_j]. weights [V, J], transforms [B, J, 4, 4], rest_joints [B, J, 3]."""
     rot = transforms[..., :3, :3]
-    # A_j = G_j [I | -J_j]: the rest-to-posed transform of joint j.
     trans = transforms[..., :3, 3] - (rot @ rest_joints[..., None])[..., 0]
-    blended_rot = torch.einsum("vj,bjxy->bvxy", weights, rot)
-    blended_trans = torch.einsum("vj,bjx->bvx", weights, trans)
+    return torch.einsum("vj,bjxy->bvxy", weights, rot), torch.einsum("vj,bjx->bvx", weights, trans)
+
+
+def skinning(vertices: torch.Tensor, weights: torch.Tensor, transforms: torch.Tensor, rest_joints: torch.Tensor) -> torch.Tensor:
+    """LBS: v' = sum_j w_j G_j [v - J_j; 1] = M v + c (``blended_transforms``). vertices [B, V, 3],
+    weights [V, J], transforms [B, J, 4, 4]."""
+    blended_rot, blended_trans = blended_transforms(weights, transforms, rest_joints)
     return (blended_rot @ vertices[..., None])[..., 0] + blended_trans
 
 

@@ -74,7 +74,7 @@ class BodyFit:
         return {"betas": self.betas.round(4).tolist(), "pose_axis_angle": self.pose.round(4).tolist(),
                 "translation_m": self.translation.round(4).tolist(), "landmark_error_px": round(self.landmark_error_px, 2),
                 "landmarks_used": self.landmarks_used, "focal_px": self.camera.fx,
-                "camera": self.camera.as_dict()}
+                "camera": self.camera.as_dict(), "posed_camera": self.posed_camera.as_dict()}
 
 
 def fit_body(person: Person, body, width: int, height: int) -> BodyFit:
@@ -133,11 +133,13 @@ def _fit(person: Person, body, width: int, height: int) -> BodyFit:
         frames = transforms[0, joint_index, :3, :3]
         return joints[0, joint_index] + torch.einsum("kxy,ky->kx", frames, offsets)
 
-    def objective(stage: int):
+    def full_pose(stage: int) -> torch.Tensor:
+        """Every joint's axis-angle [J,3]: the root's, and in the second stage the posed joints'."""
         full = pose.index_put((torch.tensor([0]),), root[None])
-        if stage:
-            full = full.index_put((torch.tensor(posed_index),), body_pose)
-        p = points(full, betas if stage else None)
+        return full.index_put((torch.tensor(posed_index),), body_pose) if stage else full
+
+    def objective(stage: int):
+        p = points(full_pose(stage), betas if stage else None)
         camera_points = p @ flip.T + translation
         pixels = focal * camera_points[:, :2] / camera_points[:, 2:].clamp(min=0.05) + centre
         r2 = ((pixels - target) ** 2).sum(1) / scale ** 2
@@ -155,7 +157,7 @@ def _fit(person: Person, body, width: int, height: int) -> BodyFit:
             loss.backward()
             optimiser.step()
     with torch.no_grad():
-        full = pose.index_put((torch.tensor([0]),), root[None]).index_put((torch.tensor(posed_index),), body_pose)
+        full = full_pose(1)
         p = points(full, betas)
         camera_points = p @ flip.T + translation
         pixels = (focal * camera_points[:, :2] / camera_points[:, 2:] + centre).numpy()

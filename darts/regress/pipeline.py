@@ -108,6 +108,7 @@ def _person(image: np.ndarray, body, times: dict):
 class Reconstruction:
     dart: object
     report: dict
+    mask: np.ndarray | None = None  # [H,W] bool: the garment mask the silhouette term used (given or estimated)
 
 
 def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
@@ -215,5 +216,5 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
               "lines": {name: points.round(5).tolist() for name, points in lines.items()},
               "crdl": {k: v for k, v in crdl.items() if k != "objective_history"},
               "vertices": len(dart.vertices), "times": {k: round(v, 3) for k, v in times.items()}}
-    return Reconstruction(dart, report)
+    return Reconstruction(dart, report, mask)
 

@@ -70,6 +70,12 @@ def _colour(rng: np.random.Generator, hue: float, saturation=(0.25, 0.85), value
     return colorsys.hsv_to_rgb(hue, rng.uniform(*saturation), rng.uniform(*value))
 
 
+def direction(yaw: float, up: float) -> np.ndarray:
+    """The unit vector turned ``yaw`` about the vertical from +Z (the body's front) and ``up`` above
+    the horizontal (radians; canonical frame, Y up)."""
+    return np.array([np.sin(yaw) * np.cos(up), np.sin(up), np.cos(yaw) * np.cos(up)])
+
+
 def _camera(rng: np.random.Generator, category: str, unseen: bool, size: int) -> Camera:
     """The category's default camera (``Camera.default``) moved about its target: yaw about the
     vertical, pitch up (> 0: from above, looking down), distance and focal length scaled, target
@@ -83,7 +89,7 @@ def _camera(rng: np.random.Generator, category: str, unseen: bool, size: int) ->
         yaw, pitch = np.deg2rad(rng.uniform(-25, 25)), np.deg2rad(rng.uniform(-3, 3))
         distance = DISTANCE * rng.uniform(0.9, 1.15)
     target = np.asarray(centre) + rng.uniform(-0.03, 0.03, 3)
-    eye = target + distance * np.array([np.sin(yaw) * np.cos(pitch), np.sin(pitch), np.cos(yaw) * np.cos(pitch)])
+    eye = target + distance * direction(yaw, pitch)
     focal = focal_for(extent, size, distance) * rng.uniform(0.92, 1.08)
     return Camera.look_at(eye, target, size, size, focal)
 
@@ -104,7 +110,7 @@ def sample_appearance(rng: np.random.Generator, category: str, unseen: bool, siz
         up, side = np.deg2rad(rng.uniform(20, 60)), np.deg2rad(rng.uniform(-40, 40))
     view = camera.centre - np.asarray(FRAMES[category][0])
     yaw = np.arctan2(view[0], view[2]) + side
-    light = np.array([np.sin(yaw) * np.cos(up), np.sin(up), np.cos(yaw) * np.cos(up)])
+    light = direction(yaw, up)
     return Appearance(camera, cloth, second, kind, float(rng.uniform(0.02, 0.06)), int(rng.integers(3)), skin,
                       background, tuple(light), float(rng.uniform(0.0, 0.02)))
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from darts.camera import Camera
 from darts.jobs import Job
+from sim.dataset.appearance import direction
 from sim.dataset.posed import POSED_LOOK, POSED_SIZE
 from sim.dataset.recipe import generator
 
@@ -41,7 +42,7 @@ def free_camera(rng: np.random.Generator, body: np.ndarray, garment: np.ndarray,
     yaw = rng.uniform(-np.pi, np.pi)
     pitch = np.deg2rad(rng.uniform(-10, 30))
     distance = rng.uniform(2.0, 4.0)
-    eye = target + distance * np.array([np.sin(yaw) * np.cos(pitch), np.sin(pitch), np.cos(yaw) * np.cos(pitch)])
+    eye = target + distance * direction(yaw, pitch)
     focal = size * rng.uniform(0.6, 0.9) * distance / extent
     return Camera.look_at(eye, target, size, size, focal)
 
@@ -51,7 +52,7 @@ def light_towards(rng: np.random.Generator, camera: Camera, target: np.ndarray) 
     view = camera.centre - target
     yaw = np.arctan2(view[0], view[2]) + np.deg2rad(rng.uniform(-40, 40))
     up = np.deg2rad(rng.uniform(20, 60))
-    return np.array([np.sin(yaw) * np.cos(up), np.sin(up), np.cos(yaw) * np.cos(up)])
+    return direction(yaw, up)
 
 
 def clutter(rng: np.random.Generator, size: int) -> np.ndarray:
