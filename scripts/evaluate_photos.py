@@ -54,7 +54,7 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
     from darts.raycast import cast
     from darts.regress.pipeline import reconstruct
     from darts.templates.defaults import DATASET_EDGE_LENGTH
-    from sim.dataset.make import draped_lines
+    from darts.geometry.loops import feature_lines
 
     start = time.process_time()
     try:
@@ -74,7 +74,7 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
     truth_vertices = np.asarray(truth.vertices, np.float64)
 
     def lines_of(dart) -> dict[str, np.ndarray]:
-        return draped_lines(dart, np.asarray(dart.vertices, np.float64))
+        return feature_lines(dart, dart.vertices)
 
     truth_lines = lines_of(truth)
 

@@ -35,7 +35,7 @@ from darts.jobs import Job, run_jobs
 from darts.regress.data import CATEGORY_IDS, load_split
 from darts.regress.lines import CREASES, VARIANTS
 from darts.regress.losses import chamfer_per_line
-from darts.regress.pipeline import shipped_model
+from darts.regress.shipped import shipped_model
 from darts.regress.train import classify, regress
 from darts.templates.categories import CATEGORIES
 

@@ -40,3 +40,11 @@ def resample_loop(points: np.ndarray, count: int, away_from: np.ndarray) -> np.n
     k = np.clip(np.searchsorted(arc, at, side="right") - 1, 0, len(steps) - 1)
     t = ((at - arc[k]) / np.maximum(steps[k], 1e-12))[:, None]
     return (1 - t) * closed[k] + t * closed[k + 1]
+
+
+def feature_lines(dart, vertices: np.ndarray) -> dict[str, np.ndarray]:
+    """Each feature line of ``dart`` at ``vertices`` [V,3] (its own, draped or posed), resampled to
+    LINE_POINTS points (``resample_loop``, oriented away from the vertices' centre)."""
+    vertices = np.asarray(vertices, np.float64)
+    centre = vertices.mean(0)
+    return {name: resample_loop(vertices[np.asarray(loop)], LINE_POINTS, centre) for name, loop in dart.lines.items()}

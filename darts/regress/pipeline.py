@@ -19,8 +19,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -28,22 +26,9 @@ import torch
 from darts.camera import IMAGE_SIZE, Camera
 from darts.errors import DartsInputError
 from darts.regress.data import CATEGORY_IDS, camera_batch, initial_lines, padded
+from darts.regress.shipped import shipped_model
 from darts.templates.defaults import DATASET_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
-
-WEIGHTS = Path(__file__).parent / "weights"
-
-
-@lru_cache(maxsize=None)
-def shipped_model(kind: str, name: str):
-    """A shipped network (``weights/<name>.pt``) and its record; loaded once per process."""
-    from darts.regress.train import load_checkpoint
-
-    path = WEIGHTS / f"{name}.pt"
-    if not path.is_file():
-        raise DartsInputError(path, "the shipped weights are missing (train them: docs/reconstruction.md)")
-    return load_checkpoint(path, kind)
-
 
 def network_input(image: np.ndarray) -> torch.Tensor:
     """uint8 [H,W,3] -> float [1,3,224,224] in [0,1] (bilinear resize when the size differs)."""

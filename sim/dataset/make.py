@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from darts.geometry.loops import LINE_POINTS
+from darts.geometry.loops import feature_lines
 from darts.jobs import Job
 from sim.dataset.recipe import DRAPE_SECONDS, garment_recipe, generator
 
@@ -51,14 +51,6 @@ def _write_json(path: Path, data: dict) -> None:
     path.write_text(json.dumps(data, indent=1))
 
 
-def draped_lines(dart, vertices: np.ndarray) -> dict[str, np.ndarray]:
-    """Each feature line of ``dart`` at ``vertices`` [V,3], resampled to LINE_POINTS points."""
-    from darts.geometry.loops import resample_loop
-
-    centre = vertices.mean(0)
-    return {name: resample_loop(vertices[np.asarray(loop)], LINE_POINTS, centre) for name, loop in dart.lines.items()}
-
-
 def make_garment(job: Job, folder: Path) -> dict:
     """A garment job (module docstring); returns the times of each stage and what the drape measured."""
     from darts.crdl.deform import deform_dart, weld_garment
@@ -80,7 +72,7 @@ def make_garment(job: Job, folder: Path) -> dict:
     dart, report = deform_dart(template, body, targets, clearance=DEFAULT_EASE)
     deformed = time.perf_counter()
     draped = drape(dart, body, CATEGORIES[recipe.category].family, DRAPE_SECONDS)
-    lines = draped_lines(dart, draped.vertices)
+    lines = feature_lines(dart, draped.vertices)
     top = "waist" if "waist" in dart.lines else "neckline"
     drop = float(np.asarray(dart.vertices, np.float64)[dart.lines[top], 1].mean() - draped.vertices[dart.lines[top], 1].mean())
     save_dart(dart, folder / "garment.npz")

@@ -102,7 +102,7 @@ def make_posed_garment(job: Job, folder: Path) -> dict:
     from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
     from sim.body_track import build_body_track
     from sim.dataset.drape import DRAPE_SOLVER
-    from sim.dataset.make import draped_lines
+    from darts.geometry.loops import feature_lines
     from sim.run import simulate
     from sim.settings import SimSettings
 
@@ -135,7 +135,7 @@ def make_posed_garment(job: Job, folder: Path) -> dict:
         worn = make_dart(posed["other"], body, betas=betas, edge_length=DATASET_EDGE_LENGTH)
         other, other_faces = carry(rest_body, posed_body, body.faces, np.asarray(worn.vertices, np.float64)), worn.faces
     joints = (body.J_regressor.double().numpy() @ posed_body)
-    lines = draped_lines(dart, garment)
+    lines = feature_lines(dart, garment)
     save_dart(dart, folder / "garment.npz")
     save_npz(folder / "posed.npz", garment=garment.astype(np.float32), garment_faces=dart.faces.astype(np.int32),
              body=posed_body.astype(np.float32), other=other.astype(np.float32), other_faces=np.asarray(other_faces, np.int32),
