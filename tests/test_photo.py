@@ -176,11 +176,13 @@ def test_a_photographs_report_carries_the_person_and_the_fitted_body(run_darts, 
 
 
 def test_a_garment_on_a_posed_person_is_fitted_through_the_pose():
-    """A short-sleeve top widened 4 cm at the hem, worn (skinned) by the default body turned 29
-    degrees with its arms lowered, rendered with its mask; `reconstruct` with the mask and no
-    camera finds the person, fits the body, and fits the template through that pose: the result,
-    posed the same way and seen by the fitted camera, covers the mask better than the undeformed
-    template on the fitted body does (IoU 0.910 against 0.866)."""
+    """A short-sleeve top made 10 cm longer with sleeves 6 cm longer, worn (skinned) by the default
+    body turned 29 degrees with its arms lowered, rendered with its mask; `reconstruct` with the
+    mask and no camera finds the person, fits the body, regresses the lines on the posed body and
+    fits the template through that pose: its cuffs come to the true ones (0.8 and 2.5 cm off
+    against 6.1 cm for the template's), and the result, posed the same way and seen by the fitted
+    camera, covers the mask better than the undeformed template on the fitted body does (IoU 0.831
+    against 0.751)."""
     import torch
 
     from darts.body.io import load_body
@@ -189,6 +191,7 @@ def test_a_garment_on_a_posed_person_is_fitted_through_the_pose():
     from darts.crdl.posed import Posing
     from darts.crdl.targets import edit_targets
     from darts.dart.build import make_dart
+    from darts.geometry.loops import feature_lines
     from darts.raycast import cast
     from darts.regress.pipeline import reconstruct
 
@@ -198,15 +201,16 @@ def test_a_garment_on_a_posed_person_is_fitted_through_the_pose():
     camera = Camera.look_at([0.0, -0.2, 3.2], [0.0, -0.25, 0.0], 256, 256, 256.0)
     template = make_dart("short-sleeve-top", body, edge_length=0.04)
     welded = weld_garment(template)
-    wider, _ = deform_dart(template, body, edit_targets("short-sleeve-top", welded.vertices, welded.lines,
-                                                       [("hem_width", 0.04)]), clearance=0.006)
-    worn = Posing.of(body, pose, None, welded.vertices)(torch.as_tensor(weld_garment(wider).vertices)).numpy()
+    longer, _ = deform_dart(template, body, edit_targets("short-sleeve-top", welded.vertices, welded.lines,
+                                                        [("hem", 0.10), ("sleeve", 0.06)]), clearance=0.006)
+    truth = weld_garment(longer)
+    worn = Posing.of(body, pose, None, welded.vertices)(torch.as_tensor(truth.vertices)).numpy()
     picture, _ = _render_body(body, pose, np.zeros(body.num_betas), camera, [(worn, welded.faces)])
     mask = cast(camera, [(body.to(torch.float64)(torch.tensor(pose)[None]).vertices[0].numpy(), body.faces),
                          (worn, welded.faces)], 1).which.reshape(256, 256) == 1
     result = reconstruct(picture, body, "short-sleeve-top", None, mask, edge_length=0.04)
     report = result.report
-    assert report["posed"] and report["lines_from"] == "template" and report["body_fit"]["landmark_error_px"] < 5
+    assert report["posed"] and report["lines_from"] == "posed regressor" and report["body_fit"]["landmark_error_px"] < 5
     fit_pose = np.asarray(report["body_fit"]["pose_axis_angle"])
     betas = np.asarray(report["body_fit"]["betas"])
     posed_camera = Camera.from_dict(report["body_fit"]["posed_camera"])
@@ -219,7 +223,14 @@ def test_a_garment_on_a_posed_person_is_fitted_through_the_pose():
         return float((render & mask).sum() / (render | mask).sum())
 
     template = make_dart("short-sleeve-top", body, betas=betas, edge_length=0.04)  # on the fitted body
-    assert iou(result.dart) > iou(template) + 0.02 and iou(result.dart) > 0.88  # measured 0.910 against 0.866
+    assert iou(result.dart) > iou(template) + 0.04 and iou(result.dart) > 0.8  # measured 0.831 against 0.751
+    welded_template = weld_garment(template)
+    true_lines, template_lines = feature_lines(truth, truth.vertices), feature_lines(welded_template, welded_template.vertices)
+    for cuff in ("left_cuff", "right_cuff"):
+        regressed = np.asarray(report["lines"][cuff])
+        off = np.linalg.norm(regressed[:, None] - true_lines[cuff][None], axis=2).min(1).mean()
+        template_off = np.linalg.norm(template_lines[cuff][:, None] - true_lines[cuff][None], axis=2).min(1).mean()
+        assert off < 0.5 * template_off, (cuff, off, template_off)
 
 
 def test_a_crop_around_the_person_maps_back_onto_the_picture():

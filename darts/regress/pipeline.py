@@ -3,7 +3,8 @@
     picture (+ mask, camera) -> without a camera: the person and the body fitted to it (darts.photo)
                              -> category (classifier, or given)
                              -> feature lines (regressor, from the category's F_g and the camera;
-                                on a fitted body with a mask: the template's own)
+                                on a fitted body with a mask: the posed regressor's, taken back
+                                to the rest pose)
                              -> the category's template on the body, deformed by the CRDL so its
                                 lines reach the regressed ones, outside the body, and (with a mask)
                                 its silhouette matches the mask
@@ -111,16 +112,18 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     (``darts.photo.person``) and the body fitted to its landmarks (``darts.photo.fit``: pose, shape,
     camera); without a mask too, a picture with no person is refused (unless
     ``accept_low_confidence``). With a mask and a person, the garment is fitted on that body: the
-    template on the fitted shape (unless ``betas``), its own lines kept (the regressor knows
-    rest-posed bodies only), the silhouette term seen through the fitted pose and camera
-    (``darts.crdl.posed.PosedTerm``); the report's ``camera`` is then the rest-posed body's."""
+    template on the fitted shape (unless ``betas``), the lines of the posed regressor
+    (``darts.regress.posed_lines``) taken back to the rest pose, the silhouette term seen through
+    the fitted pose and camera (``darts.crdl.posed.PosedTerm``); the report's ``camera`` is then the
+    rest-posed body's."""
     from darts.crdl import SILHOUETTE_WEIGHTS
-    from darts.crdl.deform import deform_dart, weld_garment
+    from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
     from darts.crdl.posed import PosedTerm
     from darts.crdl.silhouette import silhouette_term as make_term
     from darts.dart.build import make_dart
     from darts.regress.checks import confidence_problem, garment_problem, person_problem, picture_problem
+    from darts.regress.posed_lines import regress_posed_lines, template_lines
 
     problem = picture_problem(image, mask)
     if problem:
@@ -170,12 +173,12 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     template = make_dart(category, body, betas=None if not betas else np.asarray(betas), edge_length=edge_length)
     times["template_s"] = time.perf_counter() - mark
     mark = time.perf_counter()
-    if posed:  # the regressor knows rest-posed bodies only: the template keeps its own lines
-        welded = weld_garment(template)
-        lines = {name: welded.vertices[loop] for name, loop in welded.lines.items()}
+    if posed:  # the lines as the posed body shows them, taken back to its rest pose
+        lines = regress_posed_lines(image, mask, body_fit.camera, body, body_fit.pose, betas, category,
+                                    template_lines(template, category))
     else:
         lines = regress_lines(image, camera, category)
-        times["regress_s"] = time.perf_counter() - mark
+    times["regress_s"] = time.perf_counter() - mark
     silhouette = None
     if mask is not None:
         silhouette = make_term(silhouette_term, mask, body_fit.posed_camera if posed else camera)
@@ -192,7 +195,7 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
               "probabilities": dict(ranked) if classified else None, "low_confidence": low_confidence,
               "person": None if person is None else person.as_dict(), "person_looked_for": looked,
               "body_fit": None if body_fit is None else body_fit.as_dict(), "posed": posed,
-              "lines_from": "template" if posed else "regressor",
+              "lines_from": "posed regressor" if posed else "regressor",
               "given": {"category": not classified, "camera": given_camera, "mask": given_mask,
                         "betas": given_betas},
               "category_from": None if not classified else "garment network" if garment_ranked else "classifier",
