@@ -148,8 +148,9 @@ def load_posed_split(root: str | Path, split: str, body, limit: int | None = Non
     """The samples of a posed dataset's ``root/split`` (``darts dataset make --posed``) as the posed
     line regressor sees them (``darts.regress.posed_lines``): the garment's crop, grey off its mask;
     its camera cropped and turned by the body's root rotation; the template's lines on the body's
-    shape and the truth (the garment's rest lines) posed by the body's other joints. ``garments``:
-    the ``PosedGarment`` of each garment folder seen so far (filled in; kept across calls). ``body``: the dataset's body model."""
+    shape and the truth (the garment's rest lines) posed by the body's other joints. ``body``: the
+    dataset's body model; ``garments``: the ``PosedGarment`` of each garment folder seen so far
+    (filled in, so that calls can share it); a sample whose garment is not in view is left out."""
     from darts.fileio import read_image
 
     folders = sorted(p for p in (Path(root) / split).glob("*") if (p / "image.png").is_file())[:limit]
