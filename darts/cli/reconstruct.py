@@ -76,7 +76,11 @@ def add_parsers(groups) -> None:
         "reconstruct", help="one picture of a garment to a DART (classifier, feature-line regressor, CRDL)",
         description="Classify the garment in IMAGE (unless --category), regress its feature lines, deform the "
                     "category's template onto them with the CRDL (with the silhouette term when --mask is given) "
-                    "and write a DART. Without --camera the dataset's default camera of the category is assumed.")
+                    "and write a DART. Without --camera the picture is a photograph: the person in it is found and "
+                    "the body's pose, shape and camera fitted to it (none found: the dataset's default camera with "
+                    "--mask, else refused unless --accept-low-confidence); without "
+                    "--mask the garment network gives the garment's mask and category; on the fitted body the lines "
+                    "are regressed through its pose and the template fitted through it (docs/reconstruction.md).")
     parser.add_argument("image", metavar="IMAGE", help="RGB picture (PNG/JPEG), 224 x 224 or resized to it")
     parser.add_argument("-o", "--output", required=True, metavar="garment.npz")
     parser.add_argument("--mask", metavar="MASK", help="garment mask, the image's size (white = garment): the CRDL's "
