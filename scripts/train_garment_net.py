@@ -27,7 +27,7 @@ def prepare(data: Path) -> dict[str, np.ndarray]:
     """The cached network inputs [N,4,S,S] (float16), masks [N,S,S] (bool), labels [N] and splits [N]."""
     from PIL import Image
 
-    from darts.photo.garment_net import SIZE, person_crop
+    from darts.photo.garment_net import SIZE, network_input, person_crop
     from darts.photo.person import find_person
     from darts.regress.data import CATEGORY_IDS
 
@@ -45,8 +45,8 @@ def prepare(data: Path) -> dict[str, np.ndarray]:
             if crop is None:
                 continue
             garment = (np.asarray(Image.open(folder / "mask.png")) > 127).astype(np.float32)
-            inputs.append(crop.network_input(image, person.mask).numpy().astype(np.float16))
-            target = crop.network_input(np.repeat((garment * 255).astype(np.uint8)[..., None], 3, 2), garment)[3]
+            inputs.append(network_input(crop, image, person.mask).numpy().astype(np.float16))
+            target = network_input(crop, np.repeat((garment * 255).astype(np.uint8)[..., None], 3, 2), garment)[3]
             masks.append(target.numpy() > 0.5)
             labels.append(CATEGORY_IDS.index(json.loads((folder / "meta.json").read_text())["category"]))
             splits.append(split == "val")

@@ -235,14 +235,14 @@ def test_a_garment_on_a_posed_person_is_fitted_through_the_pose():
 
 def test_a_crop_around_the_person_maps_back_onto_the_picture():
     """A disc drawn on a 300 x 200 picture, cropped around itself and drawn back, covers itself (IoU > 0.95)."""
-    from darts.photo.garment_net import SIZE, person_crop
+    from darts.photo.garment_net import SIZE, network_input, person_crop
 
     rows, cols = np.mgrid[:200, :300]
     disc = ((cols - 180) ** 2 + (rows - 90) ** 2 < 40 ** 2).astype(np.float32)
     crop = person_crop(disc)
     assert crop.side == pytest.approx(80 * 1.2, abs=2)
     picture = np.repeat((disc * 255).astype(np.uint8)[..., None], 3, 2)
-    x = crop.network_input(picture, disc)
+    x = network_input(crop, picture, disc)
     assert x.shape == (4, SIZE, SIZE) and float(x[3].max()) == pytest.approx(1.0)
     back = crop.to_picture(x[3].numpy(), 300, 200) > 0.5
     assert (back & (disc > 0)).sum() / (back | (disc > 0)).sum() > 0.95

@@ -122,7 +122,8 @@ def test_the_posed_line_regressor_sees_a_sample_as_it_was_rendered(made, body):
     down 4 cm in the run, which the skinning does not know); the picture is grey off the garment."""
     import torch
 
-    from darts.regress.posed_lines import crop_box, load_posed_split, posed_garment, root_free
+    from darts.photo.crop import Crop
+    from darts.regress.posed_lines import MARGIN, load_posed_split, posed_garment, root_free
     from darts.motion.amass import load_motion
     from darts.shipped import resolve_motion
     from darts.templates.categories import CATEGORIES
@@ -141,7 +142,8 @@ def test_the_posed_line_regressor_sees_a_sample_as_it_was_rendered(made, body):
     for k, sample_id in enumerate(seen.ids):
         sample = out / split / sample_id
         mask = np.asarray(Image.open(sample / "mask.png")) > 127
-        x, y, side = crop_box(mask)
+        crop = Crop.around(mask, MARGIN)
+        x, y, side = crop.x, crop.y, crop.side
         keypoints = read_npz(sample / "keypoints.npz")
         joints = body.J_regressor.double() @ model.vertices[0]  # as the sample's keypoints were made
         cropped = seen.cameras.index([k]).project(joints[None].float())[0].numpy()

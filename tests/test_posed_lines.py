@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from darts.camera import Camera
+from darts.photo.crop import Crop
 from darts.regress.data import initial_lines
-from darts.regress.posed_lines import (cropped_camera, crop_box, garment_crop, posed, posing_of, root_free,
-                                       unposed)
+from darts.regress.posed_lines import MARGIN, garment_crop, posed, posing_of, root_free, unposed
 
 
 def _walk_pose(body) -> np.ndarray:
@@ -44,11 +44,12 @@ def test_the_crop_sees_through_its_cropped_camera():
     camera = Camera.look_at([0.3, 1.2, 2.5], [0.0, 1.0, 0.0], 320, 240, 300.0)
     mask = np.zeros((240, 320), bool)
     mask[60:140, 150:190] = True
-    x, y, side = box = crop_box(mask)
+    crop = Crop.around(mask, MARGIN)
+    x, y, side = crop.x, crop.y, crop.side
     assert side == 80 * 1.4 and (x, y) == (170 - 56, 100 - 56)
     points = np.random.default_rng(0).normal([0, 1, 0], 0.2, (20, 3))
     pixels, _ = camera.project(points)
-    cropped, _ = cropped_camera(camera, box, 224).project(points)
+    cropped, _ = crop.camera(camera, 224).project(points)
     assert np.allclose(cropped, (pixels - [x, y]) * 224 / side, atol=1e-9)
 
 
@@ -57,7 +58,7 @@ def test_the_crop_shows_the_garment_alone_on_grey():
     image[..., 0] = 200
     mask = np.zeros((100, 100), bool)
     mask[30:70, 40:60] = True
-    crop = garment_crop(image, mask, crop_box(mask), 56)
+    crop = garment_crop(image, mask, Crop.around(mask, MARGIN), 56)
     inside = crop[..., 0] == 200
     # the box is 56 px square (40 px and 20 % on each side) at one pixel per pixel: 20 x 40 of it garment
     assert crop.shape == (56, 56, 3) and np.all(crop[~inside] == 128)

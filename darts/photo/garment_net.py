@@ -11,13 +11,14 @@ Trained on the posed dataset (``scripts/train_garment_net.py``); the weights shi
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import torch
 from torch import nn
+
+from darts.photo.crop import Crop
 
 SIZE = 96
 MARGIN = 0.1
@@ -52,45 +53,18 @@ class GarmentNet(nn.Module):
         return self.mask(x), category
 
 
-@dataclass
-class Crop:
-    """A square region of the picture: top-left corner (x, y) and side, pixels."""
-
-    x: float
-    y: float
-    side: float
-
-    def network_input(self, image: np.ndarray, person_mask: np.ndarray) -> torch.Tensor:
-        """[4,SIZE,SIZE]: the region of ``image`` [H,W,3] uint8 and of ``person_mask`` [H,W] (0..1)."""
-        from PIL import Image
-
-        k = self.side / SIZE
-        data = (k, 0.0, self.x, 0.0, k, self.y)
-        rgb = Image.fromarray(np.asarray(image, np.uint8)).transform((SIZE, SIZE), Image.AFFINE, data, Image.BILINEAR)
-        mask = Image.fromarray(np.asarray(person_mask, np.float32), mode="F").transform((SIZE, SIZE), Image.AFFINE, data,
-                                                                                         Image.BILINEAR)
-        channels = np.concatenate([np.asarray(rgb, np.float32) / 255.0, np.asarray(mask, np.float32)[..., None]], 2)
-        return torch.from_numpy(channels).permute(2, 0, 1).contiguous()
-
-    def to_picture(self, mask: np.ndarray, width: int, height: int) -> np.ndarray:
-        """A [SIZE,SIZE] float map of the crop drawn back onto the picture [height,width] (0 outside)."""
-        from PIL import Image
-
-        k = SIZE / self.side
-        data = (k, 0.0, -self.x * k, 0.0, k, -self.y * k)
-        back = Image.fromarray(np.asarray(mask, np.float32), mode="F").transform((width, height), Image.AFFINE, data,
-                                                                                 Image.BILINEAR, fillcolor=0.0)
-        return np.asarray(back, np.float32)
+def network_input(crop: Crop, image: np.ndarray, person_mask: np.ndarray) -> torch.Tensor:
+    """[4,SIZE,SIZE]: the ``crop`` of ``image`` [H,W,3] uint8 (RGB in [0, 1]) and of ``person_mask``
+    [H,W] (0..1)."""
+    rgb = crop.resample(np.asarray(image, np.uint8), SIZE)
+    mask = crop.resample(np.asarray(person_mask, np.float32), SIZE)
+    channels = np.concatenate([np.asarray(rgb, np.float32) / 255.0, np.asarray(mask, np.float32)[..., None]], 2)
+    return torch.from_numpy(channels).permute(2, 0, 1).contiguous()
 
 
 def person_crop(person_mask: np.ndarray) -> Crop | None:
     """The crop around the person's mask [H,W] (> 0.5), or None if it is empty."""
-    rows, cols = np.nonzero(np.asarray(person_mask) > 0.5)
-    if len(rows) == 0:
-        return None
-    x0, x1, y0, y1 = cols.min(), cols.max() + 1, rows.min(), rows.max() + 1
-    side = max(x1 - x0, y1 - y0) * (1 + 2 * MARGIN)
-    return Crop((x0 + x1) / 2 - side / 2, (y0 + y1) / 2 - side / 2, float(side))
+    return Crop.around(np.asarray(person_mask) > 0.5, MARGIN)
 
 
 @lru_cache(maxsize=1)
@@ -112,7 +86,7 @@ def segment_garment(image: np.ndarray, person_mask: np.ndarray) -> tuple[np.ndar
     if crop is None:
         return None
     net, record = shipped_net()
-    mask_logits, category_logits = net(crop.network_input(image, person_mask)[None])
+    mask_logits, category_logits = net(network_input(crop, image, person_mask)[None])
     probability = torch.sigmoid(mask_logits[0, 0]).numpy()
     mask = crop.to_picture(probability, image.shape[1], image.shape[0]) > 0.5
     categories = torch.softmax(category_logits[0], 0).numpy()

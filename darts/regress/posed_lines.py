@@ -33,10 +33,11 @@ import torch
 
 from darts.camera import IMAGE_SIZE, Camera
 from darts.errors import DartsInputError
+from darts.photo.crop import Crop
 from darts.regress.data import CATEGORY_IDS, Samples, camera_batch, padded
 from darts.templates.categories import CATEGORIES
 
-#: the crop around the garment's mask: its box widened by this share of its side on each side
+#: the crop around the garment's mask (``Crop.around``): its box widened by this share of its side on each side
 MARGIN = 0.2
 
 
@@ -47,41 +48,18 @@ def root_free(pose: np.ndarray) -> np.ndarray:
     return pose
 
 
-def crop_box(mask: np.ndarray, margin: float = MARGIN) -> tuple[float, float, float] | None:
-    """(x, y, side) pixels: the square around ``mask`` [H,W] bool, its box widened by ``margin`` of
-    its longer side on each side; None for an empty mask."""
-    rows, cols = np.nonzero(mask)
-    if len(rows) == 0:
-        return None
-    x0, x1, y0, y1 = cols.min(), cols.max() + 1, rows.min(), rows.max() + 1
-    side = max(x1 - x0, y1 - y0) * (1 + 2 * margin)
-    return (x0 + x1) / 2 - side / 2, (y0 + y1) / 2 - side / 2, float(side)
-
-
-def cropped_camera(camera: Camera, box: tuple[float, float, float], size: int = IMAGE_SIZE) -> Camera:
-    """The camera of the square ``box`` (x, y, side) of its picture resized to ``size`` pixels:
-    u' = (u - x) size / side, likewise v."""
-    x, y, side = box
-    scale = size / side
-    return Camera(size, size, camera.fx * scale, camera.fy * scale, (camera.cx - x) * scale, (camera.cy - y) * scale,
-                  np.asarray(camera.rotation), np.asarray(camera.translation))
-
-
-def garment_crop(image: np.ndarray, mask: np.ndarray, box: tuple[float, float, float], size: int = IMAGE_SIZE) -> np.ndarray:
-    """uint8 [size,size,3]: the ``box`` of ``image`` [H,W,3], grey (``NEUTRAL``) off the garment's ``mask``."""
-    from PIL import Image
-
+def garment_crop(image: np.ndarray, mask: np.ndarray, crop: Crop, size: int = IMAGE_SIZE) -> np.ndarray:
+    """uint8 [size,size,3]: the ``crop`` of ``image`` [H,W,3], grey (``NEUTRAL``) off the garment's ``mask``."""
     from darts.regress.train import NEUTRAL
 
-    x, y, side = box
-    k = side / size
-    data = (k, 0.0, x, 0.0, k, y)
     grey = int(round(255 * NEUTRAL))
-    rgb = np.asarray(Image.fromarray(np.asarray(image, np.uint8)).transform((size, size), Image.AFFINE, data, Image.BILINEAR,
-                                                                             fillcolor=(grey, grey, grey)))
-    inside = np.asarray(Image.fromarray(np.asarray(mask, np.uint8) * 255).transform((size, size), Image.AFFINE, data,
-                                                                                     Image.BILINEAR)) > 127
-    return np.where(inside[..., None], rgb, np.uint8(grey))
+    rgb = crop.resample(np.asarray(image, np.uint8), size, fill=(grey, grey, grey))
+    return np.where(mask_crop(mask, crop, size)[..., None], rgb, np.uint8(grey))
+
+
+def mask_crop(mask: np.ndarray, crop: Crop, size: int = IMAGE_SIZE) -> np.ndarray:
+    """bool [size,size]: the ``crop`` of ``mask`` [H,W] bool (bilinear, over half)."""
+    return crop.resample(np.asarray(mask, np.uint8) * 255, size) > 127
 
 
 def posing_of(body, pose: np.ndarray, betas, points: np.ndarray):
@@ -130,13 +108,12 @@ def regress_posed_lines(image: np.ndarray, mask: np.ndarray, camera: Camera, bod
     from darts.regress.train import as_input
 
     model, _ = shipped_model("lines", "lines_posed")
-    box = crop_box(mask)
+    crop = Crop.around(mask, MARGIN)
     pose = root_free(pose)
     posing = posing_of(body, pose, betas, start)
     lines, _, creases = padded(category, posed(posing, start))
-    crop = garment_crop(image, mask, box)
-    images = torch.from_numpy(crop).permute(2, 0, 1)[None]
-    out = model(as_input(images), camera_batch([cropped_camera(camera, box)]), torch.from_numpy(lines)[None],
+    images = torch.from_numpy(garment_crop(image, mask, crop)).permute(2, 0, 1)[None]
+    out = model(as_input(images), camera_batch([crop.camera(camera, IMAGE_SIZE)]), torch.from_numpy(lines)[None],
                 torch.from_numpy(creases)[None])[-1][0].numpy().astype(np.float64)
     names = CATEGORIES[category].line_names
     rest = unposed(body, pose, betas, posing, out[: len(names)])
@@ -163,8 +140,8 @@ def load_posed_split(root: str | Path, split: str, body, limit: int | None = Non
         meta = json.loads((folder / "meta.json").read_text())
         category, key = meta["category"], meta["garment_folder"]
         mask = read_image(folder / "mask.png", "L") > 127
-        box = crop_box(mask)
-        if box is None:
+        crop = Crop.around(mask, MARGIN)
+        if crop is None:
             continue
         if key not in garments:
             garments[key] = posed_garment(Path(root) / key, category, body)
@@ -176,10 +153,10 @@ def load_posed_split(root: str | Path, split: str, body, limit: int | None = Non
                         turned @ garment.shift + np.asarray(camera.translation))
         rows["ids"].append(folder.name)
         rows["folders"].append(folder)
-        rows["images"].append(garment_crop(read_image(folder / "image.png"), mask, box).transpose(2, 0, 1))
-        rows["masks"].append(garment_crop(np.full(mask.shape + (3,), 255, np.uint8), mask, box)[..., 0] == 255)
+        rows["images"].append(garment_crop(read_image(folder / "image.png"), mask, crop).transpose(2, 0, 1))
+        rows["masks"].append(mask_crop(mask, crop))
         rows["categories"].append(CATEGORY_IDS.index(category))
-        rows["cameras"].append(cropped_camera(camera, box))
+        rows["cameras"].append(crop.camera(camera, IMAGE_SIZE))
         lines, line_mask, creases = padded(category, garment.truth)
         rows["lines"].append(lines)
         rows["initial"].append(padded(category, garment.initial)[0])
