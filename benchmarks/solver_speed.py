@@ -42,14 +42,15 @@ from sim.simulation import Simulation
 #: The scenes of issue 30: the 6k top on the walk, a skirt and pants on the walk and the squat.
 SCENES = ("short-sleeve-top:walk", "short-skirt:walk", "short-skirt:squat", "long-pants:walk", "long-pants:squat")
 #: The default when issue 30 was filed: self-contact searched every 2 substeps within 1 cm, every
-#: particle searching the BVH at every search (no lists).
+#: particle searching the BVH at every search (no lists), every kernel launched from Python.
 ISSUE_30_DEFAULT = dict(solver="xpbd", substeps=20, iterations=2, self_contact_interval=2, self_contact_reach=0.01,
-                        self_contact_list_reach=0.0)
+                        self_contact_list_reach=0.0, replay_launches=False)
 CONFIGURATIONS = {
-    "issue 30's default: xpbd 20x2, tethers, 5 mm skin, self-contact searched every 2 substeps within 1 cm": ISSUE_30_DEFAULT,
+    "issue 30's default: xpbd 20x2, tethers, 5 mm skin, self-contact searched every 2 substeps within 1 cm, launches from Python": ISSUE_30_DEFAULT,
     "self-contact searched every 2 substeps within 2 mm + travel, broad phase every 10 substeps": dict(self_contact_interval=2),
     "the same with bending every 2 substeps": dict(self_contact_interval=2, bending_interval=2),
-    "default: searched every 4 substeps within 2 mm + travel, broad phase every 10 substeps": {},
+    "the default with every launch from Python": dict(replay_launches=False),
+    "default: searched every 4 substeps within 2 mm + travel, broad phase every 10 substeps, launches replayed": {},
 }
 #: Functions whose cumulative time is the profile's rows (qualified name suffixes).
 PROFILE_ROWS = {
@@ -108,7 +109,7 @@ class Trial:
     def row(self) -> dict:
         settings = self.settings
         row = {"settings": {k: getattr(settings, k) for k in ("solver", "substeps", "iterations", "contact_skin",
-                                                              "tethers", "bending_interval", "self_contact_interval",
+                                                              "tethers", "bending_interval", "self_contact_interval", "replay_launches",
                                                               "self_contact_broad_interval", "self_contact_list_reach",
                                                               "self_contact_reach")},
                "sim_fps": self.frames / self.cpu, "stable": self.stable,

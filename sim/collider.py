@@ -40,7 +40,7 @@ class BodyCollider:
     def __init__(self, body_faces: np.ndarray, body_vertices: np.ndarray, count: int, thickness: float,
                  friction: float, settings: SimSettings, offset: np.ndarray | None = None):
         device = self.device = settings.device
-        self.launch = Launcher(device)
+        self.launch = Launcher(device, settings.replay_launches)
         self.settings, self.count = settings, count
         self.thickness, self.friction_coefficient = float(thickness), float(friction)
         self.offset_host = np.zeros(count) if offset is None else np.asarray(offset, np.float64)
@@ -114,9 +114,10 @@ class BodyCollider:
                          self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
                          self.second.uv, self.second.local])
             self.window_time = started
-        for c in (self.contact, self.second):
-            self.launch(kernels.track_contacts, self.count,
-                        [self.mesh.id, c.face, c.uv, c.local, c.point, c.normal, c.velocity])
+        c, s = self.contact, self.second
+        self.launch(kernels.track_contacts, self.count,
+                    [self.mesh.id, c.face, c.uv, c.local, c.point, c.normal, c.velocity, s.face, s.uv, s.local,
+                     s.point, s.normal, s.velocity])
 
     def resolve(self, x) -> None:
         """Push particles ``thickness`` outside their contact planes (both, in a crease) and above the
@@ -125,6 +126,10 @@ class BodyCollider:
         self.launch(kernels.resolve_contacts, self.count,
                     [x, c.point, c.normal, c.face, s.point, s.normal, s.face, self.thickness, self.offset,
                      int(self.settings.ground), 0.0, self.body_push, self.ground_push])
+
+    def launch_key(self) -> tuple:
+        """The host values ``resolve`` and ``friction`` launch with (for ``sim.launch.Replay``)."""
+        return self.thickness, self.settings.ground, self.friction_coefficient
 
     def friction(self, x, x_start, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""

@@ -190,22 +190,34 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
         query_offset[i] = p - wp.mesh_eval_position(mesh, face, uv[0], uv[1])
 
 
-@wp.kernel
-def track_contacts(mesh: wp.uint64, contact_face: wp.array(dtype=wp.int32), contact_uv: wp.array(dtype=wp.vec2),
-                   contact_local: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=wp.vec3),
-                   contact_normal: wp.array(dtype=wp.vec3), contact_velocity: wp.array(dtype=wp.vec3)):
-    """Each contact's plane on the body as it is now: the same surface point and the same direction
-    in the face's frame (exact for a face that moves rigidly), with the surface velocity there."""
-    i = wp.tid()
-    face = contact_face[i]
-    if face < 0:
+@wp.func
+def track_contact(mesh: wp.uint64, i: int, face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2),
+                  local: wp.array(dtype=wp.vec3), point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
+                  velocity: wp.array(dtype=wp.vec3)):
+    """Particle i's contact plane on the body as it is now: the same surface point and the same
+    direction in the face's frame (exact for a face that moves rigidly), with the surface velocity there."""
+    f = face[i]
+    if f < 0:
         return
-    uv = contact_uv[i]
-    local = contact_local[i]
-    e1, e2, n = face_frame(mesh, face)
-    contact_point[i] = wp.mesh_eval_position(mesh, face, uv[0], uv[1])
-    contact_normal[i] = wp.normalize(local[0] * e1 + local[1] * e2 + local[2] * n)
-    contact_velocity[i] = wp.mesh_eval_velocity(mesh, face, uv[0], uv[1])
+    at = uv[i]
+    out = local[i]
+    e1, e2, n = face_frame(mesh, f)
+    point[i] = wp.mesh_eval_position(mesh, f, at[0], at[1])
+    normal[i] = wp.normalize(out[0] * e1 + out[1] * e2 + out[2] * n)
+    velocity[i] = wp.mesh_eval_velocity(mesh, f, at[0], at[1])
+
+
+@wp.kernel
+def track_contacts(mesh: wp.uint64, face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2),
+                   local: wp.array(dtype=wp.vec3), point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
+                   velocity: wp.array(dtype=wp.vec3), second_face: wp.array(dtype=wp.int32),
+                   second_uv: wp.array(dtype=wp.vec2), second_local: wp.array(dtype=wp.vec3),
+                   second_point: wp.array(dtype=wp.vec3), second_normal: wp.array(dtype=wp.vec3),
+                   second_velocity: wp.array(dtype=wp.vec3)):
+    """Each particle's contact and second contact (``track_contact``)."""
+    i = wp.tid()
+    track_contact(mesh, i, face, uv, local, point, normal, velocity)
+    track_contact(mesh, i, second_face, second_uv, second_local, second_point, second_normal, second_velocity)
 
 
 @wp.func
@@ -353,20 +365,21 @@ def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3):
     e_len2 = wp.dot(e, e)
     n1 = wp.cross(e, xk - xi)
     n2 = wp.cross(xl - xi, e)
-    a1 = wp.length(n1)
-    a2 = wp.length(n2)
-    if e_len2 < 1.0e-16 or a1 < 1.0e-16 or a2 < 1.0e-16:
+    a1_2 = wp.dot(n1, n1)  # (twice the triangles' areas)^2
+    a2_2 = wp.dot(n2, n2)
+    if e_len2 < 1.0e-16 or a1_2 < 1.0e-32 or a2_2 < 1.0e-32:
         return 0.0, wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0), 0
     e_len = wp.sqrt(e_len2)
-    u1 = n1 / a1
-    u2 = n2 / a2
-    angle = wp.atan2(wp.dot(wp.cross(u1, u2), e / e_len), wp.dot(u1, u2))
-    # d(angle)/dx_k = -n1 / h1 and d(angle)/dx_l = -n2 / h2 (h = distance of k, l from the edge line);
-    # the edge ends take the rest so that the gradient is translation and rotation invariant.
-    gk = -u1 * (e_len / a1)
-    gl = -u2 * (e_len / a2)
-    sk = wp.dot(xk - xi, e) / e_len2
-    sl = wp.dot(xl - xi, e) / e_len2
+    inverse_e_len2 = 1.0 / e_len2
+    # atan2 ignores the common positive factor |n1| |n2| |e| of its arguments: no normalising.
+    angle = wp.atan2(wp.dot(wp.cross(n1, n2), e) / e_len, wp.dot(n1, n2))
+    # d(angle)/dx_k = -n1 |e| / |n1|^2 and d(angle)/dx_l = -n2 |e| / |n2|^2 (the unit normal over the
+    # distance of k, l from the edge line); the edge ends take the rest so that the gradient is
+    # translation and rotation invariant.
+    gk = -n1 * (e_len / a1_2)
+    gl = -n2 * (e_len / a2_2)
+    sk = wp.dot(xk - xi, e) * inverse_e_len2
+    sl = wp.dot(xl - xi, e) * inverse_e_len2
     gi = -(1.0 - sk) * gk - (1.0 - sl) * gl
     gj = -sk * gk - sl * gl
     return angle, gi, gj, gk, gl, 1

@@ -1,4 +1,5 @@
-"""Kernel launches recorded once and replayed.
+"""Kernel launches recorded once and replayed, one by one (``Launcher``) or as a captured block
+(``Replay``).
 
 ``wp.launch`` packs every argument on every call, about 13 µs on the CPU backend; a substep makes
 some twenty launches, each with the same arrays every time. ``Launcher`` records a launch the first
@@ -26,14 +27,18 @@ class Launcher:
     """``launcher(kernel, dim, inputs)`` runs ``kernel`` like ``wp.launch(kernel, dim, inputs, device)``.
 
     Recorded launches keep their arrays alive, so an array's id names it for as long as the
-    launcher lives; the launcher belongs to the object that owns the arrays."""
+    launcher lives; the launcher belongs to the object that owns the arrays. With ``record`` off
+    every call is a plain ``wp.launch`` (how the solver launched before issue 30; the same results)."""
 
-    def __init__(self, device: str):
-        self.device = device
+    def __init__(self, device: str, record: bool = True):
+        self.device, self.record = device, record
         self._recorded: dict[tuple, tuple] = {}
 
     def __call__(self, kernel, dim: int, inputs: list) -> None:
         if dim == 0:
+            return
+        if not self.record:
+            wp.launch(kernel, dim=dim, inputs=inputs, device=self.device)
             return
         key = (kernel, dim, tuple(id(value) if _is_array(value) else None for value in inputs))
         found = self._recorded.get(key)
@@ -50,3 +55,43 @@ class Launcher:
                     launch.set_param_at_index(index, inputs[index])
                     scalars[index] = value
         launch.launch()
+
+
+class Replay:
+    """``replay(key, block)`` runs ``block()`` (a fixed sequence of launches and array fills) as one
+    captured graph: Warp's CPU capture (APIC) records the operations once and replays them in C++
+    without Python, about 0.2 µs an operation against the 3-13 µs of a launch from Python.
+
+    A capture holds the arrays it saw and the value of every scalar argument, so ``key`` must
+    name everything ``block`` depends on that can change between calls (the arrays' ids, flags,
+    step sizes): a new key captures again. The first call with a key runs ``block()`` directly, so
+    its kernels are loaded outside the capture, the second captures it, later ones replay. With
+    ``capture`` off, and always on CUDA devices (CUDA graphs are not used yet), the block runs directly."""
+
+    def __init__(self, device: str, capture: bool = True):
+        self.capture = capture and wp.get_device(device).is_cpu
+        self.device = device
+        self._graphs: dict = {}
+
+    @property
+    def captured(self) -> int:
+        """How many blocks have been captured (one per key seen twice)."""
+        return sum(graph is not False for graph in self._graphs.values())
+
+    def __call__(self, key, block) -> None:
+        if not self.capture:
+            block()
+            return
+        graph = self._graphs.get(key)
+        if graph is None:  # first sight: run it and capture next time
+            self._graphs[key] = False
+            block()
+            return
+        if graph is False:
+            wp.capture_begin(device=self.device)
+            try:
+                block()
+            finally:
+                graph = wp.capture_end(device=self.device)
+            self._graphs[key] = graph
+        wp.capture_launch(graph)

@@ -536,9 +536,9 @@ class SelfContact:
     """The garment's self-contact state on the device; positions are the solver's particle array."""
 
     def __init__(self, x, rest: np.ndarray, faces: np.ndarray, edges: np.ndarray, separation: float,
-                 exclusion: float, device: str, layer: np.ndarray | None = None):
+                 exclusion: float, device: str, layer: np.ndarray | None = None, record: bool = True):
         self.x, self.device, self.count = x, device, x.shape[0]
-        self.launch = Launcher(device)
+        self.launch = Launcher(device, record)
         self.separation, self.exclusion = float(separation), float(exclusion)
         self.reach = float(exclusion)
         self.edge_edge = True  # edge-edge contacts too (off only to show what they add)
@@ -597,6 +597,10 @@ class SelfContact:
                         [self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,
                          x_start, self.rest, reach, self.exclusion, self.layer, self.edge_face, self.partner,
                          self.partner_st, self.partner_side])
+
+    def launch_key(self) -> tuple:
+        """The host values ``resolve`` and ``friction`` launch with (for ``sim.launch.Replay``)."""
+        return self.separation, self.reach, self.edge_edge, self.friction_coefficient, self.layered
 
     def resolve(self, inverse_mass, body_push) -> None:
         """One sweep keeping every particle ``separation`` off its triangle and every edge off its

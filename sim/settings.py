@@ -50,6 +50,9 @@ class SimSettings:
     continuous_collision: bool = True  # a particle whose path entered the body goes back out that face
     crease_contacts: bool = True  # a particle kept off a second body face within a thickness of its push
     tethers: bool = True  # XPBD: long-range tethers (sim.tethers) hold stretch over many edges at once
+    # kernel launches recorded once and replayed, the XPBD sweeps as one captured block (``sim.launch``);
+    # off: every launch through wp.launch from Python, as before issue 30 (the same results, slower)
+    replay_launches: bool = True
     seed: int = 0
 
     def check(self) -> None:

@@ -20,7 +20,7 @@ RISE = 0.05  # m, the fold's height: the upper layer starts this far above the l
 WIDTH = 0.2  # m
 
 
-def _folded_sheet() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def folded_sheet() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A Z-up sheet folded once: the lower layer lies on the ground, the upper one RISE above it,
     joined by a vertical strip. Returns vertices [V,3], faces [F,3] and which vertices are upper."""
     s = np.arange(0.0, 2 * LAYER + RISE + 1e-9, SPACING)
@@ -44,7 +44,7 @@ FAR_BODY = (np.array([[0.0, 0.0, 50.0], [1.0, 0.0, 50.0], [0.0, 1.0, 50.0], [0.0
 
 
 def _drop(self_contact: bool, frames: int = 20):
-    vertices, faces, upper = _folded_sheet()
+    vertices, faces, upper = folded_sheet()
     model = cloth_model(sheet_dart(vertices, faces))
     body_vertices, body_faces = FAR_BODY
     settings = SimSettings(self_contact=self_contact)

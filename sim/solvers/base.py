@@ -62,7 +62,7 @@ class Solver:
     def __init__(self, model: ClothModel, state: ClothState, settings: SimSettings):
         self.model, self.settings = model, settings
         self.device = device = settings.device
-        self.launch = Launcher(device)
+        self.launch = Launcher(device, settings.replay_launches)
         self.count = len(model.rest)
         self.mass = float_array(model.mass, device)
         self.inverse_mass = float_array(1.0 / model.mass, device)
@@ -73,7 +73,7 @@ class Solver:
         self.self_contact = SelfContact(
             state.x, exclusion_rest(model), model.faces, model.edges, SELF_SEPARATION * thickness,
             max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * thickness + settings.self_contact_reach),
-            device, model.layer)
+            device, model.layer, settings.replay_launches)
         self.self_contact.friction_coefficient = float(model.material["friction"])
         self.damping = float(np.exp(-settings.damping / (settings.fps * settings.substeps)))  # per substep
 

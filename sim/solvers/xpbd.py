@@ -2,7 +2,8 @@
 
 Per substep: v += dt (g + f/m); predict x; place the body; then ``iterations`` Gauss-Seidel sweeps
 over the long-range tethers (``sim.tethers``, unless ``settings.tethers`` is off), edge stretch,
-contacts, then seam springs, after one bending sweep; v = dx / dt.
+contacts, then seam springs, after one bending sweep; v = dx / dt. The sweeps and the velocity
+update, the same launches every substep, run as one captured block (``sim.launch.Replay``).
 Compliance is 1 / stiffness: edges use the material's stretch stiffness (N/m), seam springs their
 seam's stiffness, hinges kappa from ``hinge_stiffness``.
 """
@@ -13,7 +14,7 @@ import numpy as np
 from darts.geometry.warp_runtime import warp
 from sim import kernels
 from sim.coloring import color_order
-from sim.launch import Launcher
+from sim.launch import Launcher, Replay
 from sim.solvers.base import Solver, hinge_stiffness
 from sim.tethers import tethers
 from sim.state import float_array, int_array
@@ -24,10 +25,11 @@ wp = warp()
 class ColoredConstraints:
     """A constraint list on the device, sorted by colour; ``launch`` projects it colour by colour."""
 
-    def __init__(self, members: np.ndarray, fields: dict[str, np.ndarray], particle_count: int, device: str):
+    def __init__(self, members: np.ndarray, fields: dict[str, np.ndarray], particle_count: int, device: str,
+                 record: bool = True):
         order, self.offsets = color_order(members, particle_count)
         self.device = device
-        self._launch = Launcher(device)
+        self._launch = Launcher(device, record)
         self.count = len(members)
         members = np.asarray(members, np.int64)
         self.members = int_array(members.reshape(len(members), members.shape[1] if members.ndim == 2 else 1)[order], device)
@@ -61,22 +63,24 @@ class XpbdSolver(Solver):
     def __init__(self, model, state, settings):
         super().__init__(model, state, settings)
         sprung = model.spring_stiffness > 0
+        record = settings.replay_launches
         self.stretch = ColoredConstraints(model.edges, {
             "rest": model.edge_rest,
             "compliance": _compliance(model.edge_stiffness),
             "anchors": np.full((len(model.edges), 2), -1),
-        }, self.count, self.device)
+        }, self.count, self.device, record)
         self.seams = ColoredConstraints(model.springs[sprung], {
             "rest": model.spring_rest[sprung], "compliance": _compliance(model.spring_stiffness[sprung]),
             "anchors": model.spring_anchors[sprung],
-        }, self.count, self.device)
+        }, self.count, self.device, record)
         pairs, limits = tethers(model) if settings.tethers else (np.zeros((0, 2), np.int64), np.zeros(0))
-        self.tethers = ColoredConstraints(pairs, {"limit": limits}, self.count, self.device)
+        self.tethers = ColoredConstraints(pairs, {"limit": limits}, self.count, self.device, record)
+        self.replay = Replay(self.device, settings.replay_launches)
         kappa = hinge_stiffness(model)
         keep = kappa > 0
         self.bending = ColoredConstraints(model.hinges[keep], {
             "rest_angle": model.hinge_rest_angle[keep], "compliance": _compliance(kappa[keep]),
-        }, self.count, self.device)
+        }, self.count, self.device, record)
 
     def step(self, state_in, state_out, collider, dt, time, substep):
         self.external_forces(state_in, time)
@@ -84,10 +88,18 @@ class XpbdSolver(Solver):
                                                   wp.vec3(*self.settings.gravity), dt, self.damping, state_out.x,
                                                   state_out.v])
         self.find_contacts(state_in, state_out, collider, dt, substep)
+        bend = substep % self.settings.bending_interval == 0
+        key = (bend, dt, id(state_in.x), id(state_out.x), id(collider), self.self_contact.launch_key(),
+               collider.launch_key())
+        self.replay(key, lambda: self.sweeps(state_in, state_out, collider, dt, bend))
+
+    def sweeps(self, state_in, state_out, collider, dt, bend: bool) -> None:
+        """The substep's constraint sweeps (with ``bend``, one bending sweep first) and ``finish``:
+        launches only, the same every substep (``step`` replays them as one captured block)."""
         x = state_out.x
         for group in (self.stretch, self.seams, self.bending):
             group.multiplier.zero_()
-        if substep % self.settings.bending_interval == 0:  # its compliance spread over the interval
+        if bend:  # its compliance spread over the interval
             b = self.bending.fields
             self.bending.launch(kernels.solve_bending, [b["rest_angle"], b["compliance"]],
                                 [self.inverse_mass, dt * self.settings.bending_interval, self.bending.multiplier, x])
