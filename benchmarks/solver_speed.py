@@ -56,10 +56,7 @@ CONFIGURATIONS = {
 PROFILE_ROWS = {
     "body contact search and tracking": "collider.py:update",
     "self-contact search (candidate lists, search, edges)": "self_contact.py:search",
-    "self-contact projection": "self_contact.py:resolve",
-    "body contact projection": "collider.py:resolve",
-    "friction": "collider.py:friction",
-    "constraint sweeps (tethers, stretch, seams, bending)": "xpbd.py:launch",
+    "constraint sweeps, contact projection, friction, velocities (one captured block)": "launch.py:run",
     "whole frame": "simulation.py:step_frame",
 }
 

@@ -51,11 +51,11 @@ def test_replayed_block_runs_as_its_launches_and_captures_again_for_a_new_key():
         launch(scale_into, 4, [scratch, 1.0, total])
 
     for _ in range(3):
-        replay(2.0, lambda: block(2.0))
+        replay.run(2.0, lambda: block(2.0))
     assert replay.captured == 1
     np.testing.assert_array_equal(total.numpy(), 3 * 2.0 * np.arange(4))
     for _ in range(3):
-        replay(0.5, lambda: block(0.5))
+        replay.run(0.5, lambda: block(0.5))
     assert replay.captured == 2
     np.testing.assert_array_equal(total.numpy(), (6.0 + 1.5) * np.arange(4))
 

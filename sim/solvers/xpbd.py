@@ -91,7 +91,7 @@ class XpbdSolver(Solver):
         bend = substep % self.settings.bending_interval == 0
         key = (bend, dt, id(state_in.x), id(state_out.x), id(collider), self.self_contact.launch_key(),
                collider.launch_key())
-        self.replay(key, lambda: self.sweeps(state_in, state_out, collider, dt, bend))
+        self.replay.run(key, lambda: self.sweeps(state_in, state_out, collider, dt, bend))
 
     def sweeps(self, state_in, state_out, collider, dt, bend: bool) -> None:
         """The substep's constraint sweeps (with ``bend``, one bending sweep first) and ``finish``:
