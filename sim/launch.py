@@ -79,6 +79,8 @@ class Replay:
         return sum(graph is not False for graph in self._graphs.values())
 
     def run(self, key, block) -> None:
+        """Run ``block()`` for ``key``: directly, captured, or replayed (see the class). The arrays it
+        launches with must stay alive, as they do in the ``Launcher`` records of the launches."""
         if not self.capture:
             block()
             return
