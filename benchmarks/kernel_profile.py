@@ -7,9 +7,9 @@ settings) is stepped through its 0.5 s settle untimed, then ``--frames`` frames 
 (``time.process_time``, one core): first as users run it (the frame rate alone), then again from
 the start with every kernel launch (``sim.launch.Launcher``) and BVH refit timed on the host; the
 sweeps a default step replays as one captured block run launch by launch there, so that each of
-their kernels is seen; each launch's time includes
-the 2-3 µs of replaying a recorded launch from Python. Prints ms per frame and launches per frame,
-largest first; the rest of the frame (Python, numpy) is the difference from the whole.
+their kernels is seen; each launch's time includes the 2-3 µs of replaying a recorded launch from
+Python. Prints ms per frame and launches per frame, largest first; the rest of the frame (Python,
+numpy) is the difference from the whole.
 """
 from __future__ import annotations
 

@@ -75,7 +75,7 @@ class XpbdSolver(Solver):
         }, self.count, self.device, record)
         pairs, limits = tethers(model) if settings.tethers else (np.zeros((0, 2), np.int64), np.zeros(0))
         self.tethers = ColoredConstraints(pairs, {"limit": limits}, self.count, self.device, record)
-        self.replay = Replay(self.device, settings.replay_launches)
+        self.replay = Replay(self.device, record)
         kappa = hinge_stiffness(model)
         keep = kappa > 0
         self.bending = ColoredConstraints(model.hinges[keep], {
