@@ -1,7 +1,7 @@
 """Speed and quality of solver settings, against a baseline run in the same process, on several scenes.
 
     python benchmarks/solver_speed.py [--scenes GARMENT:MOTION ...] [--frames N] [--configurations NAME ...]
-                                      [--profile] [--out docs/data/benchmark_solver.json]
+                                      [--profile] [--perturbed N] [--out docs/data/benchmark_solver.json]
 
 Scenes (issue 30): the 6k short-sleeve top on the walk (30 frames after the settle), the short
 skirt and the long pants on the walk and the squat (the whole motion), on the default body at 30 fps
@@ -16,7 +16,10 @@ the frames), the largest gap of a stiff seam (m), and the most garment edges pas
 garment triangle in a frame. The first configuration is the baseline (the default when issue 30 was
 filed); ``ratio`` is each one's speed over it. The time of building the tethers (once per run, a few
 seconds) is not in the frame rate. ``--profile`` adds where the time of the last configuration goes
-(cProfile, cumulative seconds per frame of the solver's pieces).
+(cProfile, cumulative seconds per frame of the solver's pieces). Penetration, the largest strain and
+the crossings are chaotic (a micrometre at the start moves them by tens of per cent at the end of a
+walk): ``--perturbed N`` runs every configuration N more times from start positions moved by a
+micrometre and reports each measure's spread, so that a difference can be told from that noise.
 """
 from __future__ import annotations
 
@@ -51,6 +54,13 @@ CONFIGURATIONS = {
     "the same with bending every 2 substeps": dict(self_contact_interval=2, bending_interval=2),
     "the default with every launch from Python": dict(replay_launches=False),
     "default: searched every 4 substeps within 2 mm + travel, broad phase every 10 substeps, launches replayed": {},
+    # Leads, not the default (issue 30): small steps, 25 x 1 (better seams and penetration, more strain),
+    # with the surface tethers trimmed by 1 % (less strain); self-contact searched as often in time.
+    "small steps: xpbd 25x1, bending and body search every 2 substeps, self-contact every 5, broad phase every 12, tethers x 0.99":
+        dict(substeps=25, iterations=1, bending_interval=2, contact_interval=2, self_contact_interval=5,
+             self_contact_broad_interval=12, tether_scale=0.99),
+    "small steps with bending and body search every substep":
+        dict(substeps=25, iterations=1, self_contact_interval=5, self_contact_broad_interval=12, tether_scale=0.99),
 }
 #: Functions whose cumulative time is the profile's rows (qualified name suffixes).
 PROFILE_ROWS = {
@@ -61,12 +71,24 @@ PROFILE_ROWS = {
 }
 
 
-class Trial:
-    """One configuration on the scene: its simulation, its CPU time and its quality so far."""
+#: m: the standard deviation of the normal noise a perturbed run adds to every start coordinate.
+PERTURBATION = 1e-6
+#: The quality measures of a row (``Trial.row``), each the worse the larger.
+QUALITY = ("strain_mean", "strain_p99", "strain_max", "max_penetration", "max_penetration_winding",
+           "max_stiff_seam_gap", "max_self_crossing_edges")
 
-    def __init__(self, dart, model, track, settings: SimSettings, profile: bool = False):
+
+class Trial:
+    """One configuration on the scene: its simulation, its CPU time and its quality so far; with a
+    ``perturbation_seed``, started from positions moved by ``PERTURBATION`` (seeded normal noise)."""
+
+    def __init__(self, dart, model, track, settings: SimSettings, profile: bool = False,
+                 perturbation_seed: int | None = None):
         self.dart, self.model, self.track, self.settings = dart, model, track, settings
-        self.sim = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
+        start = track.place_rest(model.rest)
+        if perturbation_seed is not None:
+            start = start + np.random.default_rng(perturbation_seed).normal(0.0, PERTURBATION, start.shape)
+        self.sim = Simulation(model, start, track.faces, track.vertices[0], settings)
         self.sim.step_frame(track.vertices[1])  # compiles the kernels; not timed
         self.stiff = np.isin(dart.pair_seam, [i for i, s in enumerate(dart.seams) if s.regime == "stiff"])
         self.cpu, self.frames, self.strains, self.stable = 0.0, 0, [], True
@@ -106,7 +128,8 @@ class Trial:
     def row(self) -> dict:
         settings = self.settings
         row = {"settings": {k: getattr(settings, k) for k in ("solver", "substeps", "iterations", "contact_skin",
-                                                              "tethers", "bending_interval", "self_contact_interval", "replay_launches",
+                                                              "tethers", "tether_scale", "bending_interval", "self_contact_interval", "replay_launches",
+                                                              "contact_interval",
                                                               "self_contact_broad_interval", "self_contact_list_reach",
                                                               "self_contact_reach")},
                "sim_fps": self.frames / self.cpu, "stable": self.stable,
@@ -122,19 +145,32 @@ class Trial:
         return row
 
 
-def compare(dart, model, track, configurations: dict[str, dict], frames: int, profile: bool = False) -> dict:
+def compare(dart, model, track, configurations: dict[str, dict], frames: int, profile: bool = False,
+            perturbed: int = 0) -> dict:
     """Every configuration on the same ``frames`` recorded frames (after the settle), alternated frame
     by frame in this process so that a busy machine slows them alike; the first is the baseline of
-    ``ratio``. ``profile``: a second copy of the last configuration runs alongside under cProfile
-    (its rows go to the last configuration's ``profile_ms_per_frame``; the profiler's overhead stays
-    out of the ratios)."""
+    ``ratio``. ``perturbed``: each configuration also runs that many times from start positions
+    perturbed by ``PERTURBATION`` (seeds 1, 2, ...); its row keeps the unperturbed run's quality,
+    adds ``spread`` (the least and the most of each quality measure over all its runs: how far a
+    chaotic measure moves by itself) and counts every run in its frame rate. ``profile``: a second
+    copy of the last configuration runs alongside under cProfile (its rows go to the last
+    configuration's ``profile_ms_per_frame``; the profiler's overhead stays out of the ratios)."""
     names = list(configurations)
-    trials = {name: Trial(dart, model, track, SimSettings(**configurations[name])) for name in names}
+    trials = {name: [Trial(dart, model, track, SimSettings(**configurations[name]), perturbation_seed=seed)
+                     for seed in [None, *range(1, perturbed + 1)]] for name in names}
     profiled = Trial(dart, model, track, SimSettings(**configurations[names[-1]]), profile=True) if profile else None
     for k in range(2, min(len(track.vertices), track.settle_frames + frames + 1)):
-        for trial in [*trials.values(), *([profiled] if profiled else [])]:
+        for trial in [*(t for runs in trials.values() for t in runs), *([profiled] if profiled else [])]:
             trial.step(k)
-    results = {name: trial.row() for name, trial in trials.items()}
+    results = {}
+    for name, runs in trials.items():
+        rows = [run.row() for run in runs]
+        results[name] = row = rows[0]
+        row["sim_fps"] = sum(run.frames for run in runs) / sum(run.cpu for run in runs)
+        if perturbed:
+            row["spread"] = {measure: [min(r[measure] for r in rows if r[measure] is not None),
+                                       max(r[measure] for r in rows if r[measure] is not None)]
+                             for measure in QUALITY if any(r[measure] is not None for r in rows)}
     for row in results.values():
         row["ratio"] = row["sim_fps"] / results[names[0]]["sim_fps"]
     if profiled:
@@ -151,6 +187,9 @@ def main() -> None:
     parser.add_argument("--configurations", nargs="+", default=list(CONFIGURATIONS), choices=list(CONFIGURATIONS),
                         metavar="NAME", help="which rows (default: all; the first is the baseline)")
     parser.add_argument("--profile", action="store_true", help="profile the last configuration (a copy of it, run alongside)")
+    parser.add_argument("--perturbed", type=int, default=0, metavar="N",
+                        help=f"also run each configuration N times from start positions perturbed by {PERTURBATION:g} m "
+                             "and report each quality measure's spread over the runs (default 0)")
     parser.add_argument("--out", type=Path, default=Path("docs/data/benchmark_solver.json"))
     args = parser.parse_args()
     body = load_body()
@@ -162,7 +201,7 @@ def main() -> None:
         track = build_body_track(body, load_motion(resolve_motion(motion)), 30.0, 0.5)
         frames = args.frames or (30 if index == 0 else len(track.vertices))
         results = compare(dart, model, track, {name: CONFIGURATIONS[name] for name in args.configurations}, frames,
-                          args.profile)
+                          args.profile, args.perturbed)
         for name, row in results.items():
             print(scene, name, json.dumps(row), flush=True)
         document["scenes"].append({"garment": garment, "motion": motion, "frames": min(frames, len(track.vertices) - track.settle_frames - 1),

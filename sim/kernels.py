@@ -359,8 +359,22 @@ def solve_max_distances(offset: int, pairs: wp.array2d(dtype=wp.int32), limit: w
 
 
 @wp.func
-def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3):
-    """Angle of the hinge (edge i-j; triangles (i, j, k) and (j, i, l)), 0 when flat, and its gradient."""
+def angle_of(sine: float, cosine: float):
+    """atan2(sine, cosine) (the two scaled alike): where |angle| < 45 degrees (cosine > |sine|: every
+    hinge near its rest angle), an odd minimax polynomial of t = sine / cosine, arctan t within
+    1.7e-6 rad on [-1, 1], about twice as fast as atan2; atan2 elsewhere."""
+    if cosine > wp.abs(sine):
+        t = sine / cosine
+        t2 = t * t
+        return t * (0.999977218 + t2 * (-0.332622808 + t2 * (0.193540258 + t2 * (-0.116426204 + t2 * (
+            0.052647065 + t2 * -0.011719029)))))
+    return wp.atan2(sine, cosine)
+
+
+@wp.func
+def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3, rest_cos: float, rest_sin: float):
+    """Angle of the hinge (edge i-j; triangles (i, j, k) and (j, i, l); 0 when flat) less its rest
+    angle (given by its cosine and sine), wrapped into [-pi, pi], and the angle's gradient."""
     e = xj - xi
     e_len2 = wp.dot(e, e)
     n1 = wp.cross(e, xk - xi)
@@ -371,8 +385,11 @@ def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3):
         return 0.0, wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0), 0
     e_len = wp.sqrt(e_len2)
     inverse_e_len2 = 1.0 / e_len2
-    # atan2 ignores the common positive factor |n1| |n2| |e| of its arguments: no normalising.
-    angle = wp.atan2(wp.dot(wp.cross(n1, n2), e) / e_len, wp.dot(n1, n2))
+    # cos and sin of the angle, both times |n1| |n2| |e| (no normalising: angle_of takes their ratio);
+    # those of (angle - rest) by the difference formulas, so no wrapping is needed
+    cosine = wp.dot(n1, n2) * e_len
+    sine = wp.dot(wp.cross(n1, n2), e)
+    error = angle_of(sine * rest_cos - cosine * rest_sin, cosine * rest_cos + sine * rest_sin)
     # d(angle)/dx_k = -n1 |e| / |n1|^2 and d(angle)/dx_l = -n2 |e| / |n2|^2 (the unit normal over the
     # distance of k, l from the edge line); the edge ends take the rest so that the gradient is
     # translation and rotation invariant.
@@ -382,31 +399,20 @@ def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3):
     sl = wp.dot(xl - xi, e) * inverse_e_len2
     gi = -(1.0 - sk) * gk - (1.0 - sl) * gl
     gj = -sk * gk - sl * gl
-    return angle, gi, gj, gk, gl, 1
-
-
-@wp.func
-def angle_error(angle: float, rest: float):
-    """angle - rest, wrapped into [-pi, pi]."""
-    c = angle - rest
-    if c > wp.pi:
-        c = c - 2.0 * wp.pi
-    if c < -wp.pi:
-        c = c + 2.0 * wp.pi
-    return c
+    return error, gi, gj, gk, gl, 1
 
 
 @wp.kernel
-def solve_bending(offset: int, hinges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=float),
-                  compliance: wp.array(dtype=float), inverse_mass: wp.array(dtype=float), dt: float,
-                  multiplier: wp.array(dtype=float), x: wp.array(dtype=wp.vec3)):
+def solve_bending(offset: int, hinges: wp.array2d(dtype=wp.int32), rest_cos: wp.array(dtype=float),
+                  rest_sin: wp.array(dtype=float), compliance: wp.array(dtype=float),
+                  inverse_mass: wp.array(dtype=float), dt: float, multiplier: wp.array(dtype=float),
+                  x: wp.array(dtype=wp.vec3)):
     """XPBD dihedral constraint C = angle - rest angle (wrapped to [-pi, pi]) with compliance 1/kappa."""
     h = wp.tid() + offset
     i, j, k, l = hinges[h, 0], hinges[h, 1], hinges[h, 2], hinges[h, 3]
-    angle, gi, gj, gk, gl, ok = dihedral_gradient(x[i], x[j], x[k], x[l])
+    c, gi, gj, gk, gl, ok = dihedral_gradient(x[i], x[j], x[k], x[l], rest_cos[h], rest_sin[h])
     if ok == 0:
         return
-    c = angle_error(angle, rest_angle[h])
     wi, wj, wk, wl = inverse_mass[i], inverse_mass[j], inverse_mass[k], inverse_mass[l]
     weight = wi * wp.dot(gi, gi) + wj * wp.dot(gj, gj) + wk * wp.dot(gk, gk) + wl * wp.dot(gl, gl)
     alpha = compliance[h] / (dt * dt)

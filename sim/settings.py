@@ -50,6 +50,9 @@ class SimSettings:
     continuous_collision: bool = True  # a particle whose path entered the body goes back out that face
     crease_contacts: bool = True  # a particle kept off a second body face within a thickness of its push
     tethers: bool = True  # XPBD: long-range tethers (sim.tethers) hold stretch over many edges at once
+    # XPBD: the surface tethers' limits times this (never under the rest chord); the graph path they are
+    # measured on runs about 2 % over the surface distance, so a little under 1 lets them bind sooner
+    tether_scale: float = 1.0
     # kernel launches recorded once and replayed, the XPBD sweeps as one captured block (``sim.launch``);
     # off: every launch through wp.launch from Python, as before issue 30 (the same results, slower)
     replay_launches: bool = True
@@ -59,7 +62,7 @@ class SimSettings:
         """Raise ValueError naming the first setting out of range (the solver's name is the
         registry's to check: ``sim.solvers.solver_class``)."""
         finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
-                                               self.damping, self.contact_reach, self.self_contact_reach, self.self_contact_list_reach, self.contact_skin, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
+                                               self.damping, self.contact_reach, self.self_contact_reach, self.self_contact_list_reach, self.contact_skin, self.tether_scale, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
         if not finite:
             raise ValueError("settings must be finite numbers")
         rules = [
@@ -78,6 +81,7 @@ class SimSettings:
             (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),
             (self.self_contact_broad_interval >= 1,
              f"self-contact broad-phase interval must be >= 1, got {self.self_contact_broad_interval}"),
+            (0.9 <= self.tether_scale <= 1, f"tether scale must be in [0.9, 1], got {self.tether_scale}"),
             (self.self_contact_list_reach >= 0, f"self-contact list reach must be >= 0 m, got {self.self_contact_list_reach}"),
         ]
         for ok, message in rules:

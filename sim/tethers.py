@@ -11,7 +11,9 @@ zero compliance), so it never resists folding or compression. Two kinds, all in 
   ``LEVELS`` times the median edge length; the limit is the shortest path to them through the
   graph of edges and two-edge hops (rest Euclidean lengths), an estimate of the geodesic distance
   (median 2 % above the straight chord on the shipped top), so an isometric motion (unfolding,
-  flattening) is never resisted. Stiff seams join the graph with length 0 (tethers cross them).
+  flattening) is never resisted; times ``scale`` (``SimSettings.tether_scale``, 1 by default), never
+  under the rest chord: a scale a little under 1 trims the path's overestimate of the surface
+  distance, so the tethers bind sooner. Stiff seams join the graph with length 0 (tethers cross them).
 - **loop tethers**: along every closed feature line (waist, hem, cuffs, neckline), every particle
   to the ones 2, 4, 8, ... positions further round the loop, limited to the arc length between
   them along the loop (a chord never exceeds its arc); the waist, which holds a skirt or trousers up,
@@ -67,8 +69,8 @@ def _surface_graph(model: ClothModel) -> sp.csr_matrix:
     return graph.maximum(graph.T)
 
 
-def surface_tethers(model: ClothModel, per_particle: int = 3, seed: int = 0, chunk: int = 256):
-    """Surface tethers of ``model``: pairs [T,2] and limits [T] (m)."""
+def surface_tethers(model: ClothModel, per_particle: int = 3, seed: int = 0, chunk: int = 256, scale: float = 1.0):
+    """Surface tethers of ``model``: pairs [T,2] and limits [T] (m), max(rest chord, ``scale`` x graph path)."""
     n = len(model.rest)
     graph = _surface_graph(model)
     spacing = float(np.median(model.edge_rest))
@@ -90,7 +92,9 @@ def surface_tethers(model: ClothModel, per_particle: int = 3, seed: int = 0, chu
             limits.append(distance[rows[keep], cols[keep]])
     if not pairs:
         return np.zeros((0, 2), np.int64), np.zeros(0)
-    return np.concatenate(pairs), np.concatenate(limits)
+    pairs = np.concatenate(pairs)
+    chord = np.linalg.norm(model.rest[pairs[:, 0]] - model.rest[pairs[:, 1]], axis=1)
+    return pairs, np.maximum(chord, scale * np.concatenate(limits))
 
 
 def loop_tethers(model: ClothModel, loops: list[np.ndarray], held: list[bool] | None = None):
@@ -122,8 +126,8 @@ def loop_tethers(model: ClothModel, loops: list[np.ndarray], held: list[bool] | 
     return np.concatenate(pairs), np.concatenate(limits)
 
 
-def tethers(model: ClothModel, seed: int = 0):
-    """Every tether of ``model`` (surface, then loop): pairs [T,2] and limits [T] (m)."""
-    surface = surface_tethers(model, seed=seed)
+def tethers(model: ClothModel, seed: int = 0, scale: float = 1.0):
+    """Every tether of ``model`` (surface, with ``scale``, then loop): pairs [T,2] and limits [T] (m)."""
+    surface = surface_tethers(model, seed=seed, scale=scale)
     loops = loop_tethers(model, list(model.loops.values()), [name.split("/")[-1] in HELD_LOOPS for name in model.loops])
     return np.concatenate([surface[0], loops[0]]).astype(np.int64), np.concatenate([surface[1], loops[1]])

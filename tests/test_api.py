@@ -66,6 +66,7 @@ def test_jobs_travel_as_json_and_come_back_equal():
     (lambda: sim.simulate("short-skirt", "walk", material="wool"), "unknown material 'wool'"),
     (lambda: sim.simulate("short-skirt", "walk", sim.SimSettings(solver="fem")), "unknown solver 'fem'"),
     (lambda: sim.simulate("short-skirt", "walk", frames=0), "frames must be >= 1"),
+    (lambda: sim.simulate("short-skirt", "walk", sim.SimSettings(tether_scale=0.5)), "tether scale must be in [0.9, 1]"),
     (lambda: sim.simulate("short-skirt", "walk", output="x.abc"), "output must end in"),
 ])
 def test_bad_input_raises_one_clear_error(call, problem):

@@ -77,7 +77,7 @@ def test_free_fall_accelerates_at_g(body, solver):
 
 @wp.kernel
 def _hinge_gradient(points: wp.array(dtype=wp.vec3), angle: wp.array(dtype=float), grad: wp.array(dtype=wp.vec3)):
-    a, gi, gj, gk, gl, ok = kernels.dihedral_gradient(points[0], points[1], points[2], points[3])
+    a, gi, gj, gk, gl, ok = kernels.dihedral_gradient(points[0], points[1], points[2], points[3], 1.0, 0.0)
     angle[0] = a
     grad[0] = gi
     grad[1] = gj
@@ -100,6 +100,31 @@ def test_dihedral_gradient_matches_finite_differences():
                 step[p, c] = 1e-6
                 numeric[p, c] = (dihedral_angles(points + step, hinge)[0] - dihedral_angles(points - step, hinge)[0]) / 2e-6
         assert np.abs(grad.numpy() - numeric).max() < 1e-3 * max(1.0, np.abs(numeric).max())
+
+
+@wp.kernel
+def _hinge_errors(points: wp.array2d(dtype=wp.vec3), rest: wp.array(dtype=float), error: wp.array(dtype=float)):
+    h = wp.tid()
+    c, gi, gj, gk, gl, ok = kernels.dihedral_gradient(points[h, 0], points[h, 1], points[h, 2], points[h, 3],
+                                                      wp.cos(rest[h]), wp.sin(rest[h]))
+    error[h] = c
+
+
+def test_dihedral_error_is_the_wrapped_angle_less_the_rest_angle():
+    """Near the rest angle (the polynomial) and far from it (atan2), across the wrap at +-pi."""
+    rng = np.random.default_rng(5)
+    count = 20000
+    points = np.array([[0, 0, 0], [1, 0, 0], [0.3, 0.8, 0.1], [0.6, -0.7, 0.3]]) + rng.normal(0, 0.4, (count, 4, 3))
+    angle = dihedral_angles(points.reshape(-1, 3), np.arange(4 * count).reshape(count, 4))
+    rest = np.where(rng.random(count) < 0.5, angle + rng.normal(0, 0.3, count), rng.uniform(-np.pi, np.pi, count))
+    error = wp.zeros(count, dtype=float)
+    wp.launch(_hinge_errors, count, [wp.array(points.astype(np.float32), dtype=wp.vec3),
+                                     wp.array(rest.astype(np.float32)), error])
+    expected = np.angle(np.exp(1j * (angle - rest)))  # wrapped into [-pi, pi]
+    difference = np.angle(np.exp(1j * (error.numpy() - expected)))
+    near = np.abs(expected) < np.pi / 4
+    assert 0.3 * count < near.sum() < 0.9 * count
+    assert np.abs(difference).max() < 2e-5
 
 
 def test_welded_is_exactly_closed_stiff_within_a_millimetre_loose_wider(welded_stiff_loose):

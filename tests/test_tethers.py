@@ -137,3 +137,25 @@ def test_tether_limits_never_resist_an_isometric_motion():
     side = 2 * np.sin(np.pi / 8)
     assert np.allclose(loop_limits, np.minimum(steps, 8 - steps) * side)
     assert surface_tethers(model)[0].shape[1] == 2
+
+
+def test_tether_scale_trims_the_surface_limits_down_to_the_rest_chord():
+    """``scale`` multiplies every surface tether's limit (the graph path) but never takes it under
+    the rest chord; 1 keeps the path, and the solver builds its tethers with the setting."""
+    vertices, faces, _ = _strip_over_bar()
+    model = cloth_model(sheet_dart(vertices, faces))
+    pairs, path = surface_tethers(model)
+    trimmed_pairs, trimmed = surface_tethers(model, scale=0.95)
+    chord = np.linalg.norm(model.rest[pairs[:, 0]] - model.rest[pairs[:, 1]], axis=1)
+    assert np.array_equal(pairs, trimmed_pairs)
+    assert np.allclose(trimmed, np.maximum(chord, 0.95 * path))
+    # over the bar the path bends round it, so some limits stay at 0.95 x path; on the flat sides
+    # the path is the chord (within the two-edge hops' 2 %), so others stop at the chord
+    assert 0.05 * len(path) < np.sum(np.isclose(trimmed, 0.95 * path)) < len(path)
+    assert np.sum(trimmed < path - 1e-9) > 0.5 * len(path) and np.all(trimmed >= chord - 1e-12)
+    bar = trimesh.creation.box((0.1, 0.1, 0.1))
+    for scale, expected in ((1.0, path), (0.95, trimmed)):
+        solver = Simulation(model, model.rest, np.asarray(bar.faces), np.asarray(bar.vertices),
+                            SimSettings(tether_scale=scale)).solver
+        assert np.isclose(np.sort(solver.tethers.fields["limit"].numpy())[:len(path)].sum(),
+                          np.sort(np.concatenate([expected, tethers(model)[1][len(path):]]))[:len(path)].sum(), rtol=1e-5)

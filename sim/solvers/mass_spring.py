@@ -44,18 +44,13 @@ def spring_forces(pairs: wp.array2d(dtype=wp.int32), rest: wp.array(dtype=float)
 
 
 @wp.kernel
-def hinge_forces(hinges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=float), kappa: wp.array(dtype=float),
-                 x: wp.array(dtype=wp.vec3), force: wp.array(dtype=wp.vec3), gradients: wp.array2d(dtype=wp.vec3),
-                 diagonal: wp.array(dtype=float)):
+def hinge_forces(hinges: wp.array2d(dtype=wp.int32), rest_cos: wp.array(dtype=float), rest_sin: wp.array(dtype=float),
+                 kappa: wp.array(dtype=float), x: wp.array(dtype=wp.vec3), force: wp.array(dtype=wp.vec3),
+                 gradients: wp.array2d(dtype=wp.vec3), diagonal: wp.array(dtype=float)):
     """Bending force f = -kappa (angle - rest) d(angle)/dx and its Gauss-Newton stiffness kappa g g^T."""
     h = wp.tid()
-    angle, gi, gj, gk, gl, ok = kernels.dihedral_gradient(x[hinges[h, 0]], x[hinges[h, 1]], x[hinges[h, 2]], x[hinges[h, 3]])
-    if ok == 0:
-        gi = wp.vec3(0.0)
-        gj = wp.vec3(0.0)
-        gk = wp.vec3(0.0)
-        gl = wp.vec3(0.0)
-    c = kernels.angle_error(angle, rest_angle[h])
+    c, gi, gj, gk, gl, ok = kernels.dihedral_gradient(x[hinges[h, 0]], x[hinges[h, 1]], x[hinges[h, 2]], x[hinges[h, 3]],
+                                                      rest_cos[h], rest_sin[h])  # (zeros where degenerate)
     gradients[h, 0] = gi
     gradients[h, 1] = gj
     gradients[h, 2] = gk
@@ -182,7 +177,8 @@ class MassSpringSolver(Solver):
         self.rest = wp.array(rest.astype(np.float32), device=device)
         self.stiffness = wp.array(stiffness.astype(np.float32), device=device)
         self.hinges = wp.array(model.hinges.astype(np.int32), dtype=wp.int32, device=device)
-        self.rest_angle = wp.array(model.hinge_rest_angle.astype(np.float32), device=device)
+        self.rest_cos = wp.array(np.cos(model.hinge_rest_angle).astype(np.float32), device=device)
+        self.rest_sin = wp.array(np.sin(model.hinge_rest_angle).astype(np.float32), device=device)
         self.kappa = wp.array(hinge_stiffness(model).astype(np.float32), device=device)
         self.blocks = wp.zeros(len(pairs), dtype=wp.mat33, device=device)
         self.gradients = wp.zeros((len(model.hinges), 4), dtype=wp.vec3, device=device)
@@ -207,7 +203,7 @@ class MassSpringSolver(Solver):
         self.launch(spring_forces, self.pairs.shape[0],
                     [self.pairs, self.rest, self.stiffness, state_in.x, self.force, self.blocks, self.diagonal])
         self.launch(hinge_forces, self.hinges.shape[0],
-                    [self.hinges, self.rest_angle, self.kappa, state_in.x, self.force, self.gradients, self.diagonal])
+                    [self.hinges, self.rest_cos, self.rest_sin, self.kappa, state_in.x, self.force, self.gradients, self.diagonal])
         self.launch(gravity_guess, self.count, [state_in.v, wp.vec3(*self.settings.gravity), dt, self.dv, self.z])
         self._stiffness_product(self.z, h2, 0.0)  # h^2 H (v + dv0)
         rz = self.scalar[0]

@@ -73,13 +73,14 @@ class XpbdSolver(Solver):
             "rest": model.spring_rest[sprung], "compliance": _compliance(model.spring_stiffness[sprung]),
             "anchors": model.spring_anchors[sprung],
         }, self.count, self.device, record)
-        pairs, limits = tethers(model) if settings.tethers else (np.zeros((0, 2), np.int64), np.zeros(0))
+        pairs, limits = tethers(model, scale=settings.tether_scale) if settings.tethers else (np.zeros((0, 2), np.int64), np.zeros(0))
         self.tethers = ColoredConstraints(pairs, {"limit": limits}, self.count, self.device, record)
         self.replay = Replay(self.device, record)
         kappa = hinge_stiffness(model)
         keep = kappa > 0
         self.bending = ColoredConstraints(model.hinges[keep], {
-            "rest_angle": model.hinge_rest_angle[keep], "compliance": _compliance(kappa[keep]),
+            "rest_cos": np.cos(model.hinge_rest_angle[keep]), "rest_sin": np.sin(model.hinge_rest_angle[keep]),
+            "compliance": _compliance(kappa[keep]),
         }, self.count, self.device, record)
 
     def step(self, state_in, state_out, collider, dt, time, substep):
@@ -101,7 +102,7 @@ class XpbdSolver(Solver):
             group.multiplier.zero_()
         if bend:  # its compliance spread over the interval
             b = self.bending.fields
-            self.bending.launch(kernels.solve_bending, [b["rest_angle"], b["compliance"]],
+            self.bending.launch(kernels.solve_bending, [b["rest_cos"], b["rest_sin"], b["compliance"]],
                                 [self.inverse_mass, dt * self.settings.bending_interval, self.bending.multiplier, x])
         t, d, seam = self.tethers.fields, self.stretch.fields, self.seams.fields
         for _ in range(self.settings.iterations):
