@@ -54,13 +54,11 @@ CONFIGURATIONS = {
     "the same with bending every 2 substeps": dict(self_contact_interval=2, bending_interval=2),
     "the default with every launch from Python": dict(replay_launches=False),
     "default: searched every 4 substeps within 2 mm + travel, broad phase every 10 substeps, launches replayed": {},
-    # Leads, not the default (issue 30): small steps, 25 x 1 (better seams and penetration, more strain),
+    # A lead, not the default (issue 30): small steps, 25 x 1 (better seams and penetration, more strain),
     # with the surface tethers trimmed by 1 % (less strain); self-contact searched as often in time.
     "small steps: xpbd 25x1, bending and body search every 2 substeps, self-contact every 5, broad phase every 12, tethers x 0.99":
         dict(substeps=25, iterations=1, bending_interval=2, contact_interval=2, self_contact_interval=5,
              self_contact_broad_interval=12, tether_scale=0.99),
-    "small steps with bending and body search every substep":
-        dict(substeps=25, iterations=1, self_contact_interval=5, self_contact_broad_interval=12, tether_scale=0.99),
 }
 #: Functions whose cumulative time is the profile's rows (qualified name suffixes).
 PROFILE_ROWS = {

@@ -346,12 +346,13 @@ def solve_max_distances(offset: int, pairs: wp.array2d(dtype=wp.int32), limit: w
     c = wp.tid() + offset
     a, b = pairs[c, 0], pairs[c, 1]
     d = x[a] - x[b]
-    length = wp.length(d)
-    if length <= limit[c]:
+    length2 = wp.dot(d, d)
+    if length2 <= limit[c] * limit[c]:  # slack (most tethers): no square root
         return
     wa, wb = inverse_mass[a], inverse_mass[b]
     if wa + wb <= 0.0:
         return
+    length = wp.sqrt(length2)
     step = (limit[c] - length) / (wa + wb)
     n = d / length
     x[a] = x[a] + wa * step * n
