@@ -89,8 +89,11 @@ def _speeds(v, max_speed: float) -> tuple:
     finite = np.isfinite(velocities).all(axis=1)
     if not finite.any():
         return wp.vec3(0.0), 0.0
-    mean = velocities[finite].mean(axis=0)
-    return wp.vec3(*mean), min(float(np.median(np.linalg.norm(velocities[finite] - mean, axis=1))), max_speed)
+    if not finite.all():
+        velocities = velocities[finite]
+    mean = velocities.mean(axis=0)
+    spread = velocities - mean
+    return wp.vec3(*mean), min(float(np.median(np.sqrt(np.einsum("ij,ij->i", spread, spread)))), max_speed)
 
 
 @wp.func
