@@ -166,9 +166,8 @@ def compare(dart, model, track, configurations: dict[str, dict], frames: int, pr
         results[name] = row = rows[0]
         row["sim_fps"] = sum(run.frames for run in runs) / sum(run.cpu for run in runs)
         if perturbed:
-            row["spread"] = {measure: [min(r[measure] for r in rows if r[measure] is not None),
-                                       max(r[measure] for r in rows if r[measure] is not None)]
-                             for measure in QUALITY if any(r[measure] is not None for r in rows)}
+            values = {measure: [r[measure] for r in rows if r[measure] is not None] for measure in QUALITY}
+            row["spread"] = {measure: [min(v), max(v)] for measure, v in values.items() if v}
     for row in results.values():
         row["ratio"] = row["sim_fps"] / results[names[0]]["sim_fps"]
     if profiled:

@@ -51,6 +51,11 @@ def hinge_stiffness(model: ClothModel) -> np.ndarray:
     return model.hinge_bend * 3.0 * edge2 / np.maximum(area1 + area2, 1e-12)
 
 
+def hinge_rest_cos_sin(model: ClothModel) -> tuple[np.ndarray, np.ndarray]:
+    """Cosine and sine of each hinge's rest angle [H] (``kernels.dihedral_gradient`` takes them)."""
+    return np.cos(model.hinge_rest_angle), np.sin(model.hinge_rest_angle)
+
+
 class Solver:
     """Base of the registered solvers (``name``: the registry key; ``default_substeps``: per frame at
     30 fps; ``iterations_help``: what ``SimSettings.iterations`` means to it, or None)."""

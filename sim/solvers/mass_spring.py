@@ -12,7 +12,7 @@ import numpy as np
 
 from darts.geometry.warp_runtime import warp
 from sim import kernels
-from sim.solvers.base import Solver, hinge_stiffness
+from sim.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
 
 wp = warp()
 
@@ -177,8 +177,8 @@ class MassSpringSolver(Solver):
         self.rest = wp.array(rest.astype(np.float32), device=device)
         self.stiffness = wp.array(stiffness.astype(np.float32), device=device)
         self.hinges = wp.array(model.hinges.astype(np.int32), dtype=wp.int32, device=device)
-        self.rest_cos = wp.array(np.cos(model.hinge_rest_angle).astype(np.float32), device=device)
-        self.rest_sin = wp.array(np.sin(model.hinge_rest_angle).astype(np.float32), device=device)
+        self.rest_cos, self.rest_sin = (wp.array(values.astype(np.float32), device=device)
+                                        for values in hinge_rest_cos_sin(model))
         self.kappa = wp.array(hinge_stiffness(model).astype(np.float32), device=device)
         self.blocks = wp.zeros(len(pairs), dtype=wp.mat33, device=device)
         self.gradients = wp.zeros((len(model.hinges), 4), dtype=wp.vec3, device=device)

@@ -15,7 +15,7 @@ from darts.geometry.warp_runtime import warp
 from sim import kernels
 from sim.coloring import color_order
 from sim.launch import Launcher, Replay
-from sim.solvers.base import Solver, hinge_stiffness
+from sim.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
 from sim.tethers import tethers
 from sim.state import float_array, int_array
 
@@ -78,9 +78,9 @@ class XpbdSolver(Solver):
         self.replay = Replay(self.device, record)
         kappa = hinge_stiffness(model)
         keep = kappa > 0
+        rest_cos, rest_sin = hinge_rest_cos_sin(model)
         self.bending = ColoredConstraints(model.hinges[keep], {
-            "rest_cos": np.cos(model.hinge_rest_angle[keep]), "rest_sin": np.sin(model.hinge_rest_angle[keep]),
-            "compliance": _compliance(kappa[keep]),
+            "rest_cos": rest_cos[keep], "rest_sin": rest_sin[keep], "compliance": _compliance(kappa[keep]),
         }, self.count, self.device, record)
 
     def step(self, state_in, state_out, collider, dt, time, substep):
