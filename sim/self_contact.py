@@ -8,7 +8,8 @@ substeps), or from the BVH for a particle too fast for a list. Each
 sweep then keeps the particle ``separation`` away from that triangle's plane on that side, sharing
 the correction with the triangle's corners by inverse mass and barycentric weight (an XPBD contact
 with zero compliance). Remembering the side means a particle that has already passed the plane is
-pulled back instead of pushed through. Edges get the same treatment against the edges of the
+pulled back instead of pushed through; the side carries over when the particle slides on to a
+neighbouring triangle of a smooth layer. Edges get the same treatment against the edges of the
 garment triangles near them (closest points of two segments, both inside their segments, kept
 ``separation`` apart along the edges' common normal on the side they started on), which catches
 two layers whose edges slide through each other between vertices. All corrections of a sweep are
@@ -164,13 +165,25 @@ def facing_distance(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32
     return distance, bary
 
 
+@wp.func
+def side_carries(x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32),
+                 layer: wp.array(dtype=wp.int32), last: int, new: int, carry: float):
+    """Is triangle ``new`` on the same smooth layer as ``last`` (the same garment, a corner within
+    ``carry`` of ``last``'s first corner on the rest garment, normals within 60 degrees), so that a
+    side of ``last`` is the same side of ``new``."""
+    a = faces[last, 0]
+    return (layer[faces[new, 0]] == layer[a] and near_on_rest(rest, a, faces[new, 0], faces[new, 1], faces[new, 2], carry)
+            and wp.dot(face_normal(x, faces, last), face_normal(x, faces, new)) > 0.5)
+
+
 @wp.kernel
 def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
                        x_start: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
                        candidates: wp.array2d(dtype=wp.int32), candidate_count: wp.array(dtype=wp.int32),
                        reach: float, mean_velocity: wp.vec3, other_speed: float, lookahead: float, max_speed: float,
-                       exclusion: float, layer: wp.array(dtype=wp.int32), contact_face: wp.array(dtype=wp.int32),
-                       contact_bary: wp.array(dtype=wp.vec3), contact_side: wp.array(dtype=float)):
+                       exclusion: float, carry: float, layer: wp.array(dtype=wp.int32),
+                       contact_face: wp.array(dtype=wp.int32), contact_bary: wp.array(dtype=wp.vec3),
+                       contact_side: wp.array(dtype=float)):
     """Search: each particle's closest facing triangle (``facing_distance``) within reach_i
     (``reach_of``) among its candidates, or, for a particle without a list, among the BVH's triangles
     whose corners are all farther than ``exclusion`` from it on the rest garment (-1: none); its
@@ -178,8 +191,14 @@ def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp
     outfit the side is known: an outer garment's particle stays on the outer side of an inner
     garment's triangle (its normal side: garments' triangles face away from the body) and an inner
     one on the inner side of an outer triangle, so a particle that has passed through another layer
-    is pulled back. Within a garment it is kept from the last search for the same triangle, else the
-    side it was on at the start of the substep (``x_start``, after the last projection)."""
+    is pulled back. Within a garment it is kept from the last search for the same triangle, and
+    carried over to a new triangle near the last one (a corner within ``carry`` of the last one's
+    first corner on the rest garment) whose normal is within 60 degrees of the last one's: the
+    garment's triangles are consistently oriented, so a particle sliding along a smooth layer is on
+    the same side of every triangle of it, and one found behind the next triangle has passed through
+    it (taking the side afresh there would keep it through). Else (a new layer, or a fold between the
+    two triangles) it is the side the particle was on at the start of the substep (``x_start``,
+    after the last projection)."""
     i = wp.tid()
     p = x[i]
     best = int(-1)
@@ -204,9 +223,11 @@ def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp
                 best = face
                 best_distance = distance
                 best_bary = bary
+    last = contact_face[i]
     if best >= 0 and layer[faces[best, 0]] != layer[i]:
         contact_side[i] = wp.where(layer[i] > layer[faces[best, 0]], 1.0, -1.0)
-    elif best >= 0 and best != contact_face[i]:
+    elif best >= 0 and best != last and not (last >= 0 and contact_side[i] != 0.0
+                                             and side_carries(x_start, rest, faces, layer, last, best, carry)):
         contact_side[i] = wp.sign(wp.dot(x_start[i] - x_start[faces[best, 0]], face_normal(x_start, faces, best)))
     contact_face[i] = best
     contact_bary[i] = best_bary
@@ -543,6 +564,7 @@ class SelfContact:
         self.x, self.device, self.count = x, device, x.shape[0]
         self.launch = Launcher(device, record)
         self.separation, self.exclusion = float(separation), float(exclusion)
+        self.side_carry = float(exclusion)  # m on the rest garment within which a side carries over
         self.reach = float(exclusion)
         self.edge_edge = True  # edge-edge contacts too (off only to show what they add)
         self.faces = wp.array(np.ascontiguousarray(faces, np.int32), dtype=wp.int32, device=device)
@@ -593,8 +615,8 @@ class SelfContact:
                          max_speed, most, self.exclusion, self.candidates, self.candidate_distance, self.candidate_count])
         self.launch(find_self_contacts, self.count,
                     [self.mesh.id, self.faces, self.x, x_start, v, self.rest, self.candidates, self.candidate_count,
-                     reach, mean, other, lookahead, max_speed, self.exclusion, self.layer, self.face, self.bary,
-                     self.side])
+                     reach, mean, other, lookahead, max_speed, self.exclusion, self.side_carry, self.layer, self.face,
+                     self.bary, self.side])
         if self.edge_edge:
             self.launch(find_edge_contacts, self.edges.shape[0],
                         [self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,

@@ -254,6 +254,49 @@ def test_candidate_lists_find_every_contact_the_brute_force_finds():
     _matches_brute_force(contact, positions, rest, faces, reach, exclusion, everyone)
 
 
+def _side_after_sliding(folded: bool, carry: float | None = None) -> tuple[float, float]:
+    """A particle 2 mm above triangle T1 = (a, b, d) (normal +z), then moved across the shared edge
+    ad to 1 mm *below* its neighbour T2 = (a, d, c): with T2 in T1's plane (the layer flat), or,
+    with ``folded``, T2 folded back over T1 (normals 143 degrees apart) and the particle 1 mm on its
+    back, outside the fold. The particle's rest is far from both (no neighbour). Returns the side
+    kept for T1 at the first search and for T2 at the second."""
+    a, b, d = [0.0, 0.0, 0.0], [0.01, 0.005, 0.0], [0.0, 0.01, 0.0]
+    flat_c = [-0.01, 0.005, 0.0]
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    edges = np.array([[0, 1], [1, 2], [0, 2], [2, 3], [0, 3]])
+    rest = np.array([a, b, d, flat_c, [10.0, 10.0, 10.0]])
+    positions = np.array([a, b, d, flat_c, [0.004, 0.005, 0.002]])
+    x = wp.array(positions.astype(np.float32), dtype=wp.vec3)
+    v = wp.zeros(len(positions), dtype=wp.vec3)
+    contact = SelfContact(x, rest, faces, edges, 0.001, 0.015, "cpu")
+    if carry is not None:
+        contact.side_carry = carry
+    contact.search(x, v, 0.003, 0.0, 50.0)
+    first = (int(contact.face.numpy()[4]), float(contact.side.numpy()[4]))
+    if folded:  # c over T1, 6 mm up: T2's normal (0.6, 0, -0.8); the particle 1 mm above T2's back
+        positions[3] = [0.008, 0.005, 0.006]
+        positions[4] = np.array([0.004, 0.005, 0.003]) + 0.001 * np.array([-0.6, 0.0, 0.8])
+    else:
+        positions[4] = [-0.004, 0.005, -0.001]
+    x.assign(positions.astype(np.float32))
+    contact.search(x, v, 0.003, 0.0, 50.0)
+    second = (int(contact.face.numpy()[4]), float(contact.side.numpy()[4]))
+    assert first[0] == 0 and second[0] == 1  # T1, then its neighbour T2
+    return first[1], second[1]
+
+
+def test_side_carries_to_a_neighbouring_triangle_of_a_smooth_layer():
+    """A particle that slides from a triangle to its neighbour keeps the side it had (the layer's
+    triangles are consistently oriented): one found 1 mm through the flat layer's next triangle is
+    still held on the side it came from (+1, so the projection pulls it back), where a side taken
+    afresh from where it is would lock the crossing in (-1, as with the carry off). Where the layer
+    is folded between the two triangles (normals more than 60 degrees apart) the side is taken
+    afresh: a particle on the fold's back is on T2's back (-1), though it was above T1 (+1)."""
+    assert _side_after_sliding(folded=False) == (1.0, 1.0)
+    assert _side_after_sliding(folded=False, carry=0.0) == (1.0, -1.0)
+    assert _side_after_sliding(folded=True) == (1.0, -1.0)
+
+
 def test_edge_faces_gives_each_edge_a_triangle_that_has_it():
     """The triangle an edge's known side is read from (outfits): one that has both its ends, in
     either order; -1 for a pair that is no triangle's edge."""
