@@ -153,11 +153,25 @@ def read_picture(image):
 
 def classify(image, mask=None) -> list[tuple[str, float]]:
     """The garment categories of ``image`` (a path or [H,W,3] uint8) with their probabilities, most
-    likely first; ``mask`` (a path or [H,W] bool) shows the classifier the garment alone."""
+    likely first; ``mask`` (a path or [H,W] bool) shows the classifier the garment alone. Without a
+    mask the picture is a photograph and must show a person (``darts.photo.person``); a picture too
+    small, blurred or blank, or without a person, raises ``DartsInputError``."""
+    from darts.regress.checks import person_problem, picture_problem
     from darts.regress.pipeline import classify_image
 
     picture = read_picture(image)
-    return classify_image(picture, _picture_mask(mask, picture))
+    garment_mask = _picture_mask(mask, picture)
+    problem = picture_problem(picture, garment_mask)
+    if problem is None and garment_mask is None:
+        from darts.photo.person import find_person
+
+        if find_person(picture) is None:
+            problem = person_problem(given_alone="give --mask for a picture of a garment alone")
+    if problem:
+        if isinstance(image, (str, os.PathLike)):
+            raise DartsInputError(image, problem)
+        raise DartsInputError(None, f"the picture {problem}")
+    return classify_image(picture, garment_mask)
 
 
 def _picture_mask(mask, picture: np.ndarray):

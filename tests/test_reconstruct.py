@@ -30,13 +30,30 @@ def _line_error_cm(lines: dict, truth: dict) -> float:
     return float(np.mean(errors))
 
 
-@pytest.mark.parametrize("mask", [False, True], ids=["picture", "garment-alone"])
-def test_classify_names_the_sample_garment(run_darts, mask):
-    code, out, err = run_darts("classify", SAMPLE / "image.png", "--json", *(["--mask", SAMPLE / "mask.png"] if mask else []))
+def test_classify_names_the_sample_garment(run_darts):
+    code, out, err = run_darts("classify", SAMPLE / "image.png", "--json", "--mask", SAMPLE / "mask.png")
     assert code == 0, err
     ranked = json.loads(out)
     assert ranked[0]["category"] == META["category"] and ranked[0]["probability"] > 0.5
     assert len(ranked) == 3 and ranked[0]["probability"] >= ranked[1]["probability"]
+
+
+@pytest.mark.parametrize("picture", ["sample", "noise", "tiny", "blank"])
+def test_classify_without_a_mask_refuses_a_picture_without_a_person(run_darts, tmp_path, picture):
+    """A picture given alone is a photograph: the person check of ``reconstruct`` runs first, so a
+    render of a garment on the faceless body (the sample), noise, a 1 x 1 or a blank picture get one
+    line and exit 2 instead of a category."""
+    path = SAMPLE / "image.png"
+    if picture != "sample":
+        path = tmp_path / "picture.png"
+        size = 1 if picture == "tiny" else 224
+        pixels = (np.random.default_rng(0).integers(0, 256, (size, size, 3)) if picture == "noise"
+                  else np.full((size, size, 3), 128))
+        Image.fromarray(pixels.astype(np.uint8)).save(path)
+    code, out, err = run_darts("classify", path)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    expected = {"tiny": "is 1x1 pixels: too small", "blank": "too blurred or blank"}.get(picture, "shows no person")
+    assert f"{path.name}: " in err and expected in err, err
 
 
 def test_the_garment_alone_hides_everything_outside_its_mask():

@@ -66,10 +66,12 @@ def picture_problem(image: np.ndarray, mask: np.ndarray | None) -> str | None:
     return None
 
 
-def person_problem() -> str:
-    """Why a picture given alone in which no person was found is not reconstructed."""
+def person_problem(given_alone: str = "give --mask (and --camera) for a picture of a garment alone, or "
+                                      "--accept-low-confidence to go on") -> str:
+    """Why a picture given alone in which no person was found is not read: ``given_alone`` says
+    what the caller can give instead."""
     return ("shows no person (the person detector found none): a photograph must show the person wearing the garment; "
-            "give --mask (and --camera) for a picture of a garment alone, or --accept-low-confidence to go on")
+            + given_alone)
 
 
 def confidence_problem(ranked: list[tuple[str, float]]) -> str | None:
