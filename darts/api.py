@@ -154,24 +154,51 @@ def read_picture(image):
 def classify(image, mask=None) -> list[tuple[str, float]]:
     """The garment categories of ``image`` (a path or [H,W,3] uint8) with their probabilities, most
     likely first; ``mask`` (a path or [H,W] bool) shows the classifier the garment alone. Without a
-    mask the picture is a photograph and must show a person (``darts.photo.person``); a picture too
-    small, blurred or blank, or without a person, raises ``DartsInputError``."""
-    from darts.regress.checks import person_problem, picture_problem
+    mask the picture is a photograph (``read_outfit``): the categories of its outer garment (the top
+    or the dress). A picture too small, blurred or blank, or a photograph without a person, raises
+    ``DartsInputError``."""
+    from darts.regress.checks import picture_problem
     from darts.regress.pipeline import classify_image
 
     picture = read_picture(image)
     garment_mask = _picture_mask(mask, picture)
-    problem = picture_problem(picture, garment_mask)
-    if problem is None and garment_mask is None:
-        from darts.photo.person import find_person
-
-        if find_person(picture) is None:
-            problem = person_problem(given_alone="give --mask for a picture of a garment alone")
-    if problem:
-        if isinstance(image, (str, os.PathLike)):
-            raise DartsInputError(image, problem)
-        raise DartsInputError(None, f"the picture {problem}")
+    if garment_mask is None:
+        outfit = read_outfit(picture if isinstance(image, np.ndarray) else image)
+        return outfit.garments[-1].ranked if outfit.garments else []
+    _refuse(image, picture_problem(picture, garment_mask))
     return classify_image(picture, garment_mask)
+
+
+def read_outfit(image, body=None):
+    """Every garment the person in the photograph ``image`` (a path or [H,W,3] uint8) wears
+    (``darts.photo.outfit.PhotoOutfit``: ``.garments``, inner layer first, each with its kind, category,
+    probabilities and the attributes measured; ``.notes``; ``.mask(kind)``), on the body ``body``
+    (default: the bundled one) fitted to the person. A picture too small, blurred or blank, or
+    without a person, raises ``DartsInputError``."""
+    from darts.photo.fit import fit_body
+    from darts.photo.outfit import read_outfit as read
+    from darts.photo.person import find_person
+    from darts.regress.checks import person_problem, picture_problem
+
+    picture = read_picture(image)
+    _refuse(image, picture_problem(picture, None))
+    person = find_person(picture)
+    if person is None:
+        _refuse(image, person_problem(given_alone="give --mask for a picture of a garment alone"))
+    model = load_body(body)
+    outfit = read(picture, person, fit_body(person, model, picture.shape[1], picture.shape[0]), model)
+    if outfit is None:
+        _refuse(image, person_problem(given_alone="give --mask for a picture of a garment alone"))
+    return outfit
+
+
+def _refuse(image, problem: str | None) -> None:
+    """Raise ``DartsInputError`` for the picture ``image`` (a path or an array) when there is a ``problem``."""
+    if problem is None:
+        return
+    if isinstance(image, (str, os.PathLike)):
+        raise DartsInputError(image, problem)
+    raise DartsInputError(None, f"the picture {problem}")
 
 
 def _picture_mask(mask, picture: np.ndarray):
@@ -186,7 +213,8 @@ def _picture_mask(mask, picture: np.ndarray):
 
 def reconstruct(image, category: str | None = None, camera=None, mask=None, body=None,
                 betas: Sequence[float] | None = None, edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False,
-                silhouette: str = "outline", silhouette_weight: float | None = None, accept_low_confidence: bool = False):
+                silhouette: str = "outline", silhouette_weight: float | None = None, accept_low_confidence: bool = False,
+                garment: str | None = None):
     """The DART of the garment in ``image`` (a path or [H,W,3] uint8): classifier (unless
     ``category``), feature-line regressor, CRDL (with the silhouette term ``silhouette``, at
     ``silhouette_weight`` (default: the term's, ``darts.crdl.SILHOUETTE_WEIGHTS``), when ``mask`` is given).
@@ -194,7 +222,10 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     a ``Reconstruction``: ``.dart``, ``.report`` (category, probabilities, lines, CRDL numbers,
     seconds per stage) and ``.mask`` (the garment mask the silhouette term used). A picture too small, blurred or blank, or whose garment the classifier is not
     sure of, or given alone (no mask, no camera) without a person in it (``darts.photo``; these two
-    unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``)."""
+    unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``). A
+    photograph given alone is parsed into every garment it shows (``darts.photo.outfit``): ``garment``
+    (upper, lower or dress) picks the one reconstructed (default: the outer one); the report's
+    ``outfit`` lists them all."""
     from darts.camera import Camera
     from darts.crdl import check_silhouette
     from darts.regress.pipeline import reconstruct as run
@@ -202,6 +233,14 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
 
     if category is not None and category not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{category}' (one of {', '.join(CATEGORIES)})")
+    if garment is not None:
+        from darts.photo.outfit import KIND_OF, KINDS
+
+        if garment not in KINDS:
+            raise DartsInputError(None, f"garment must be one of {', '.join(KINDS)}, got {garment!r}")
+        if category is not None and KIND_OF[category] != garment:
+            raise DartsInputError(None, f"category {category} is a{'n' if KIND_OF[category] == 'upper' else ''} "
+                                        f"{KIND_OF[category]} garment, not {garment}")
     check_silhouette(silhouette)
     if not 0.003 <= edge_length <= 0.1:
         raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
@@ -218,7 +257,7 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     try:
         return run(picture, model, category, camera, _picture_mask(mask, picture), betas=betas, edge_length=edge_length,
                    progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight,
-                   accept_low_confidence=accept_low_confidence)
+                   accept_low_confidence=accept_low_confidence, garment=garment)
     except DartsInputError as error:
         if error.source is None and isinstance(image, (str, os.PathLike)):
             raise DartsInputError(image, error.problem.removeprefix("the picture ")) from None

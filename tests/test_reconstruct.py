@@ -127,7 +127,6 @@ def test_huge_images_are_refused_before_they_are_decoded(command, where, size, t
     ("tiny", "is 1x1 pixels: too small"),
     ("blank", "too blurred or blank"),
     ("blurred", "too blurred or blank"),
-    ("portrait", "shows no garment the classifier recognises: its best guess is"),
     ("mask size", "the mask is 100x100 pixels but the image is 224x224"),
     ("camera", "not a JSON camera"),
     ("category", "unknown category 'poncho'"),
@@ -144,8 +143,6 @@ def test_bad_reconstruct_input_is_one_line_exit_2_and_no_output(case, problem, t
                    "blurred": lambda: Image.open(SAMPLE / "image.png").filter(ImageFilter.GaussianBlur(3))}[case]()
         picture.save(image)
         mask, camera = None, None
-    elif case == "portrait":
-        image, mask, camera = PORTRAIT, None, None
     elif case == "mask size":
         mask = tmp_path / "mask.png"
         Image.fromarray(np.full((100, 100), 255, np.uint8)).save(mask)
@@ -161,19 +158,23 @@ def test_bad_reconstruct_input_is_one_line_exit_2_and_no_output(case, problem, t
     assert not out.exists() and list(tmp_path.glob("*.npz")) == []
 
 
-def test_a_low_confidence_answer_only_when_asked_and_the_report_says_what_was_given(run_darts, tmp_path):
-    """The portrait (under 50 % for the garment network) goes through with --accept-low-confidence,
-    and the report carries every category's probability, low_confidence, what was given (nothing but
-    the picture) and what was estimated (the person's body, the garment's mask and category)."""
+def test_a_photograph_alone_is_parsed_and_the_report_says_what_was_seen(run_darts, tmp_path):
+    """The portrait (a uniform jacket, framed above the waist) given alone: the person's parsing finds
+    a top whose sleeves run out of the picture (a long-sleeve top, the labelling rule for a jacket)
+    and no lower garment, which the report says; the report carries what was given (nothing but
+    the picture) and what was estimated (the body, the garment's mask and category)."""
     out, report = tmp_path / "garment.npz", tmp_path / "report.json"
-    code, stdout, err = run_darts("reconstruct", PORTRAIT, "-o", out, "--report", report, "--accept-low-confidence",
-                                  "--edge-length", "0.05")
-    assert code == 0 and "low confidence, accepted" in stdout, err
+    code, stdout, err = run_darts("reconstruct", PORTRAIT, "-o", out, "--report", report, "--edge-length", "0.05")
+    assert code == 0, err
     data = json.loads(report.read_text())
-    assert data["low_confidence"] and data["probability"] < 0.5 and len(data["probabilities"]) == len(CATEGORIES)
+    assert data["category"] == "long-sleeve-top" and data["probability"] >= 0.6 and not data["low_confidence"]
+    assert set(data["probabilities"]) == {"long-sleeve-top", "short-sleeve-top", "sleeveless-top"}
     assert sum(data["probabilities"].values()) == pytest.approx(1.0, abs=1e-4)
     assert data["given"] == {"category": False, "camera": False, "mask": False, "betas": False}
-    assert data["posed"] and data["mask_estimated"] and data["category_from"] == "garment network"
+    assert data["posed"] and data["mask_estimated"] and data["category_from"] == "photo parsing"
+    assert data["garment"] == "upper" and [g["kind"] for g in data["outfit"]["garments"]] == ["upper"]
+    assert data["outfit"]["garments"][0]["attributes"]["sleeve_beyond_picture"]
+    assert any("no lower garment" in note for note in data["outfit"]["notes"])
     assert (data["camera"]["width"], data["camera"]["height"]) == (512, 600) and load_dart(out).category == data["category"]
 
 

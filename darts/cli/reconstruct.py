@@ -17,6 +17,18 @@ SIM_SUFFIXES = (".usd", ".usda", ".usdc")
 def classify(args) -> int:
     from darts import api
 
+    if args.mask is None:  # a photograph: every garment the person wears
+        outfit = api.read_outfit(args.image, args.body)
+        if args.json:
+            print(json.dumps({"garments": [{**g.as_dict(), "probabilities": dict(g.ranked[: args.top])}
+                                           for g in outfit.garments], "notes": outfit.notes}, indent=1))
+            return 0
+        for garment in reversed(outfit.garments):
+            others = ", ".join(f"{c} {100 * p:.1f} %" for c, p in garment.ranked[1: args.top])
+            print(f"{garment.kind:6s} {garment.category:20s} {100 * garment.probability:6.2f} %" + (f"  ({others})" if others else ""))
+        for note in outfit.notes:
+            print(f"note: {note}")
+        return 0
     ranked = api.classify(args.image, args.mask)[: args.top]
     if args.json:
         print(json.dumps([{"category": c, "probability": p} for c, p in ranked], indent=1))
@@ -38,7 +50,7 @@ def reconstruct(args) -> int:
         check_output(args.sim_out, SIM_SUFFIXES)
     result = api.reconstruct(args.image, args.category, args.camera, args.mask, args.body, args.betas, args.edge_length,
                              progress=True, silhouette=args.silhouette, silhouette_weight=args.silhouette_weight,
-                             accept_low_confidence=args.accept_low_confidence)
+                             accept_low_confidence=args.accept_low_confidence, garment=args.garment)
     if not result.report["silhouette"]:
         result.report["note"] = ("no mask given or estimated: the CRDL fitted the regressed lines only, without its "
                                  "silhouette term; give the garment's mask (white = garment, the image's size) to use it")
@@ -88,6 +100,9 @@ def add_parsers(groups) -> None:
     parser.add_argument("--camera", metavar="camera.json", help="the picture's camera (docs/crdl.md)")
     add_silhouette_options(parser)
     parser.add_argument("--category", help="skip the classifier")
+    parser.add_argument("--garment", choices=("upper", "lower", "dress"),
+                        help="of a photograph given alone, the garment to reconstruct (default: the outer one, the top "
+                             "or the dress); the report lists every garment seen")
     parser.add_argument("--accept-low-confidence", action="store_true",
                         help="go on when the classifier's best guess is under 50 %% (the report says low_confidence); "
                              "without it such a picture is refused")
@@ -101,8 +116,15 @@ def add_parsers(groups) -> None:
     parser.add_argument("--simulate", metavar="MOTION", help="then simulate the DART: run darts-sim with this motion")
     parser.add_argument("--sim-out", metavar="OUT.usdc", help="darts-sim's output with --simulate")
     parser.set_defaults(run=reconstruct)
-    classifier = groups.add_parser("classify", help="the garment categories of a picture, most likely first")
+    classifier = groups.add_parser(
+        "classify", help="the garment categories of a picture, most likely first",
+        description="With --mask: the categories of the garment in the mask (the classifier). Without: IMAGE is a "
+                    "photograph of a person; every garment they wear (the top and the lower garment, or a dress) with "
+                    "its categories, read from what is seen: where cloth gives way to skin along the arms and legs, "
+                    "whether the cloth fills the gap between the legs, one cloth or two (docs/reconstruction.md). A "
+                    "picture without a person is refused.")
     classifier.add_argument("image", metavar="IMAGE")
+    classifier.add_argument("--body", metavar="PATH", help="SMPL-format body fitted to the person (default: the bundled body)")
     classifier.add_argument("--mask", metavar="MASK", help="garment mask (white = garment): classify the garment alone, "
                             "without its background (more robust to unseen backgrounds, docs/reconstruction.md)")
     classifier.add_argument("--top", type=int, default=3, help="how many categories to print (default 3)")

@@ -100,7 +100,8 @@ class Reconstruction:
 def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
                 mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH,
                 progress: bool = False, silhouette_term: str = "outline",
-                silhouette_weight: float | None = None, accept_low_confidence: bool = False) -> Reconstruction:
+                silhouette_weight: float | None = None, accept_low_confidence: bool = False,
+                garment: str | None = None) -> Reconstruction:
     """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
     switches the CRDL's silhouette term on and shows the classifier the garment alone; ``progress``
     shows the CRDL's steps; ``silhouette_term``: which (``darts.crdl.SILHOUETTE_WEIGHTS``),
@@ -115,7 +116,11 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     template on the fitted shape (unless ``betas``), the lines of the posed regressor
     (``darts.regress.posed_lines``) taken back to the rest pose, the silhouette term seen through
     the fitted pose and camera (``darts.crdl.posed.PosedTerm``); the report's ``camera`` is then the
-    rest-posed body's."""
+    rest-posed body's. A photograph given without a mask is parsed (``darts.photo.outfit``): every
+    garment it shows is read, with its category from what is seen (sleeve length, the legs); the
+    one reconstructed is ``garment`` (upper, lower, dress; default the outer one: the top or the
+    dress), or the one of ``category``'s kind, with its parsed mask; the report's ``outfit`` lists
+    them all."""
     from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
@@ -134,19 +139,29 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     if looked and person is None and mask is None and not accept_low_confidence:
         raise DartsInputError(None, f"the picture {person_problem()}")
     low_confidence = looked and mask is None and person is None
-    given_mask, garment_ranked = mask is not None, None
-    if person is not None and mask is None:  # a photograph given alone: the garment network
-        from darts.photo.garment_net import segment_garment
+    given_mask, garment_ranked, outfit, kind = mask is not None, None, None, None
+    if person is not None and mask is None:  # a photograph given alone: every garment it shows
+        from darts.photo.outfit import KIND_OF, read_outfit
 
         mark = time.perf_counter()
-        mask, garment_ranked = segment_garment(image, person.mask)
-        times["garment_s"] = time.perf_counter() - mark
-        problem = garment_problem(mask)
+        outfit = read_outfit(image, person, body_fit, body)
+        times["parsing_s"] = time.perf_counter() - mark
+        kind = garment or (KIND_OF[category] if category else None)
+        if kind is None:  # the outer garment: the top or the dress, else what there is
+            kind = next((g.kind for g in reversed(outfit.garments)), "upper") if outfit else "upper"
+        chosen = outfit.garment(kind) if outfit else None
+        if chosen is None and category is None and not accept_low_confidence:
+            seen = ", ".join(f"{g.kind} ({g.category})" for g in outfit.garments) if outfit and outfit.garments else "none"
+            raise DartsInputError(None, f"the picture shows a person but no {kind} garment (garments seen: {seen}); "
+                                        "choose another with --garment, or give --mask")
+        garment_ranked = chosen.ranked if chosen is not None else None
+        mask = outfit.mask(kind) if outfit else None
+        problem = None if mask is None else garment_problem(mask)
         if problem and not accept_low_confidence:
             found = "no garment" if problem == "empty" else f"a garment that {problem}"
-            raise DartsInputError(None, f"the picture shows a person but the garment network finds {found} on them; "
+            raise DartsInputError(None, f"the picture shows a person but its {kind} garment's parsing finds {found}; "
                                         "give --mask, or --accept-low-confidence to go on")
-        if problem:
+        if problem or mask is None:
             mask, low_confidence = None, True
     if classified:
         mark = time.perf_counter()
@@ -198,7 +213,8 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
               "lines_from": "posed regressor" if posed else "regressor",
               "given": {"category": not classified, "camera": given_camera, "mask": given_mask,
                         "betas": given_betas},
-              "category_from": None if not classified else "garment network" if garment_ranked else "classifier",
+              "category_from": None if not classified else "photo parsing" if garment_ranked else "classifier",
+              "garment": kind, "outfit": None if outfit is None else outfit.as_dict(),
               "mask_estimated": mask is not None and not given_mask,
               "camera": camera.as_dict(), "silhouette": silhouette is not None,
               "lines": {name: points.round(5).tolist() for name, points in lines.items()},

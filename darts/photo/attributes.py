@@ -1,0 +1,261 @@
+"""What a parsed photograph says of the garments: sleeve length, the lower garment's kind and length,
+one piece or two — measured along the limbs — and the categories that follow, with probabilities.
+
+Each limb is a polyline of BlazePose landmarks (arm: shoulder, elbow, wrist; leg: hip, knee, ankle)
+in the parsing's crop pixels. Every person pixel of the limb's body parts (the parsing's nearest
+parts: upper arm, forearm and hand; thigh, calf and foot) is projected on to the polyline, giving
+s in [0, 1] (0 at the shoulder or hip, 0.5 at the elbow or knee, 1 at the wrist or ankle, linear
+along each bone). In ``BINS`` bins of s, the *coverage* is the share of the bin's cloth and skin
+pixels that are cloth (the garment's label). The garment's **end** along the limb is where
+coverage first falls under one half for two bins running (1 when it never does; the last bin in
+the picture when the limb leaves it covered: ``beyond_picture``).
+
+- **Sleeves**: the two arms' ends averaged (an arm out of sight left out); P(none) = sigma((0.12 -
+  s) / 0.03), P(long) = sigma((s - 0.45) / 0.04) (a sleeve to the elbow or further: rolled and 3/4
+  sleeves are long sleeves), P(short) the rest; a sleeve covered out of the picture from at least
+  s = 0.3 is long at 0.6 or more.
+- **Lower garment's length**: the legs' ends; P(long) = sigma((s - 0.55) / 0.05) (the knee is 0.5).
+- **Skirt or pants**: between the legs, the middle 40 % of the segment joining the two legs'
+  points at the same s, sampled from s = 0.1 to the hem: the share of those pixels that are the
+  garment's cloth (a skirt fills the gap, trousers leave background or skin); P(skirt) =
+  sigma((fill - 0.5) / 0.1); ``SKIRT_PRIOR`` when the legs are too close for a gap to show. One
+  cloth from the shoulders down with no skirt shown below is a suit: a top and trousers.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import expit
+
+from darts.body.segmentation import PART_INDEX
+from darts.photo.parsing import BACKGROUND, DRESS, LOWER, OTHER, SKIN, UPPER, Parsing
+
+BINS = 10
+#: a limb counts as seen when this many of its bins hold at least ``MIN_BIN`` pixels
+MIN_SEEN_BINS, MIN_BIN = 3, 3
+#: a garment is present when its pixels are at least this share of the person's
+MIN_GARMENT_SHARE = 0.02
+#: a limb's pixels lie within this share of its length from its polyline (a torso pixel beside a
+#: hanging arm is not the arm's)
+REACH = 0.12
+#: a leg's width at s = 0, 0.5, 1 over the distance between the hip landmarks, and the least gap
+#: between two legs (same unit) that says anything of what fills it
+LEG_WIDTH = (1.0, 0.6, 0.45)
+MIN_GAP = 0.1
+#: P(skirt) when no gap between the legs shows
+SKIRT_PRIOR = 0.35
+ARM = ("shoulder", "elbow", "wrist")
+LEG = ("hip", "knee", "ankle")
+
+
+def _project(points: np.ndarray, polyline: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(s [N] in [0, 1], distance [N]) of ``points`` [N,2] projected on the two-bone ``polyline`` [3,2]."""
+    best_s, best_d = np.zeros(len(points)), np.full(len(points), np.inf)
+    for bone in range(2):
+        a, b = polyline[bone], polyline[bone + 1]
+        ab = b - a
+        t = np.clip(((points - a) @ ab) / max(ab @ ab, 1e-9), 0.0, 1.0)
+        d = np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
+        closer = d < best_d
+        best_s[closer], best_d[closer] = (bone + t[closer]) / 2, d[closer]
+    return best_s, best_d
+
+
+@dataclass
+class LimbCoverage:
+    """The cloth along one limb: ``coverage`` [BINS] (NaN where unseen), the ``end`` s, whether the
+    cloth runs out of the picture (``beyond_picture``) and how many bins were seen."""
+
+    coverage: np.ndarray
+    end: float | None
+    beyond_picture: bool
+    seen_bins: int
+
+    def as_dict(self) -> dict:
+        return {"coverage": [None if np.isnan(c) else round(float(c), 3) for c in self.coverage],
+                "end": None if self.end is None else round(self.end, 3), "beyond_picture": self.beyond_picture,
+                "seen_bins": self.seen_bins}
+
+
+def limb_coverage(parsing: Parsing, polyline: np.ndarray, parts: list[str], cloth: tuple[int, ...]) -> LimbCoverage:
+    """The ``cloth`` labels' coverage along ``polyline`` [3,2] (crop pixels) over the pixels of body
+    ``parts`` (module docstring)."""
+    wanted = [PART_INDEX[p] for p in parts]
+    rows, cols = np.nonzero(np.isin(parsing.parts, wanted))
+    s, distance = _project(np.stack([cols + 0.5, rows + 0.5], 1), polyline)
+    near = distance <= REACH * (np.linalg.norm(polyline[1] - polyline[0]) + np.linalg.norm(polyline[2] - polyline[1]))
+    rows, cols, s = rows[near], cols[near], s[near]
+    labels = parsing.labels[rows, cols]
+    covered = np.isin(labels, cloth)
+    counted = covered | (labels == SKIN)
+    index = np.minimum((s * BINS).astype(int), BINS - 1)
+    totals = np.bincount(index[counted], minlength=BINS)
+    coverage = np.where(totals >= MIN_BIN, np.bincount(index[counted & covered], minlength=BINS) / np.maximum(totals, 1),
+                        np.nan)
+    seen = np.flatnonzero(~np.isnan(coverage))
+    if len(seen) < MIN_SEEN_BINS:
+        return LimbCoverage(coverage, None, False, len(seen))
+    end = None
+    for k in seen:
+        if coverage[k] < 0.5 and (k + 1 >= BINS or np.isnan(coverage[k + 1]) or coverage[k + 1] < 0.5):
+            end = k / BINS
+            break
+    beyond = False
+    if end is None:
+        end = (seen[-1] + 1) / BINS
+        beyond = bool(seen[-1] < BINS - 1 and parsing.at_picture_bottom(np.isin(parsing.labels, cloth)))
+    return LimbCoverage(coverage, float(end), beyond, len(seen))
+
+
+def _limb(landmarks: np.ndarray, side: str, joints: tuple[str, ...]) -> np.ndarray:
+    from darts.photo.person import LANDMARKS
+
+    return np.array([landmarks[LANDMARKS.index(f"{side}_{j}")] for j in joints])
+
+
+def _mean_end(limbs: list[LimbCoverage]) -> tuple[float | None, bool]:
+    seen = [limb for limb in limbs if limb.end is not None]
+    if not seen:
+        return None, False
+    return float(np.mean([limb.end for limb in seen])), all(limb.beyond_picture for limb in seen)
+
+
+def between_legs_fill(parsing: Parsing, legs: list[np.ndarray], cloth: tuple[int, ...], hem: float) -> float | None:
+    """The share of cloth pixels in the gap between the two legs from s = 0.1 to ``hem`` (module
+    docstring), or None when the legs are too close for a gap to show (together, or crossed) or
+    nothing between them is in the picture. A leg's width at s is taken as ``LEG_WIDTH`` (s) times
+    the distance between the hips; where the legs' centre lines are further apart than that, the
+    middle of the gap is sampled."""
+    labels, size = parsing.labels, len(parsing.labels)
+    hips = np.linalg.norm(legs[0][0] - legs[1][0])
+    samples = []
+    for s in np.linspace(0.1, max(hem, 0.15), 8):
+        bone = min(int(s * 2), 1)
+        t = s * 2 - bone
+        ends = [leg[bone] + t * (leg[bone + 1] - leg[bone]) for leg in legs]
+        apart = np.linalg.norm(ends[1] - ends[0])
+        gap = apart - np.interp(s, (0.0, 0.5, 1.0), LEG_WIDTH) * hips
+        if gap < MIN_GAP * hips:
+            continue
+        half = 0.5 * gap / apart
+        for u in np.linspace(0.5 - half, 0.5 + half, 7):
+            point = ends[0] + u * (ends[1] - ends[0])
+            col, row = int(point[0]), int(point[1])
+            if 0 <= row < size and 0 <= col < size and parsing.labels[row, col] != OTHER:
+                samples.append(labels[row, col])
+    if len(samples) < 7:
+        return None
+    return float(np.isin(np.array(samples), cloth).mean())
+
+
+def _sleeve_probabilities(end: float) -> dict[str, float]:
+    none = float(expit((0.12 - end) / 0.03))
+    long = float(expit((end - 0.45) / 0.04))
+    short = max(0.0, 1.0 - none - long)
+    total = none + short + long
+    return {"none": none / total, "short": short / total, "long": long / total}
+
+
+@dataclass
+class GarmentGuess:
+    """One visible garment: its ``kind`` (upper, lower, dress), the parsing label of its pixels,
+    its categories with probabilities (most likely first) and the evidence."""
+
+    kind: str
+    label: int
+    ranked: list[tuple[str, float]]
+    attributes: dict
+
+    @property
+    def category(self) -> str:
+        return self.ranked[0][0]
+
+    @property
+    def probability(self) -> float:
+        return self.ranked[0][1]
+
+    def as_dict(self) -> dict:
+        return {"kind": self.kind, "category": self.category, "probability": round(self.probability, 4),
+                "probabilities": {c: round(p, 4) for c, p in self.ranked}, "attributes": self.attributes}
+
+
+def _ranked(probabilities: dict[str, float]) -> list[tuple[str, float]]:
+    return sorted(probabilities.items(), key=lambda item: -item[1])
+
+
+def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) -> tuple[dict, dict[str, float]]:
+    arms = {side: limb_coverage(parsing, _limb(landmarks, side, ARM), [f"{side}_upper_arm", f"{side}_forearm",
+                                                                       f"{side}_hand"], cloth)
+            for side in ("left", "right")}
+    end, beyond = _mean_end(list(arms.values()))
+    probabilities = _sleeve_probabilities(end) if end is not None else {"none": 1 / 3, "short": 1 / 3, "long": 1 / 3}
+    if beyond and end >= 0.3 and probabilities["long"] < 0.6:  # covered out of the picture: at least this long
+        probabilities = {"none": 0.0, "short": 0.4, "long": 0.6}
+    evidence = {"sleeve_end": None if end is None else round(end, 3), "sleeve_beyond_picture": beyond,
+                "arms": {k: v.as_dict() for k, v in arms.items()},
+                "sleeve": max(probabilities, key=probabilities.get) if end is not None else None}
+    return evidence, probabilities
+
+
+def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) -> tuple[dict, float | None, float | None]:
+    """(evidence, P(long), P(skirt)) of the garment below the waist labelled ``cloth``."""
+    polylines = {side: _limb(landmarks, side, LEG) for side in ("left", "right")}
+    legs = {side: limb_coverage(parsing, polylines[side], [f"{side}_thigh", f"{side}_calf", f"{side}_foot"], cloth)
+            for side in ("left", "right")}
+    end, beyond = _mean_end(list(legs.values()))
+    fill = between_legs_fill(parsing, list(polylines.values()), cloth, end if end is not None else 0.5)
+    p_long = None if end is None else float(expit((end - 0.55) / 0.05))
+    if beyond and p_long is not None and p_long < 0.6:
+        p_long = 0.6  # the hem is out of the picture: at least this long, more likely long than short
+    p_skirt = None if fill is None else float(expit((fill - 0.5) / 0.1))
+    evidence = {"hem_end": None if end is None else round(end, 3), "hem_beyond_picture": beyond,
+                "between_legs_fill": None if fill is None else round(fill, 3),
+                "legs": {k: v.as_dict() for k, v in legs.items()}}
+    return evidence, p_long, p_skirt
+
+
+def garments_seen(parsing: Parsing, landmarks: np.ndarray) -> tuple[list[GarmentGuess], list[str]]:
+    """(every visible garment, outermost last: the lower garment, then the top or the dress;
+    notes on what could not be seen) of a parsed person whose BlazePose ``landmarks`` [33,2] are in
+    picture pixels (module docstring)."""
+    points = parsing.to_crop(landmarks)
+    person = parsing.labels != BACKGROUND
+    share = {label: (parsing.labels == label).sum() / max(person.sum(), 1) for label in (UPPER, LOWER, DRESS)}
+    garments, notes = [], []
+    if share[DRESS] >= MIN_GARMENT_SHARE:
+        lower, _, p_skirt = _lower(parsing, points, (DRESS,))
+        if (SKIRT_PRIOR if p_skirt is None else p_skirt) < 0.5:  # one colour, trousers below: a suit, two garments
+            notes.append("one cloth from the shoulders to the legs but trousers below: taken as a top and trousers")
+            return _separates(parsing.split_one_piece(), points, notes)
+        sleeves, p_sleeve = _sleeves(parsing, points, (DRESS,))
+        attributes = {**sleeves, **lower, "one_piece": parsing.evidence}
+        names = {"long": "long-sleeve-dress", "short": "short-sleeve-dress", "none": "sleeveless-dress"}
+        garments.append(GarmentGuess("dress", DRESS, _ranked({names[k]: p for k, p in p_sleeve.items()}), attributes))
+        return garments, notes
+    return _separates(parsing, points, notes)
+
+
+def _separates(parsing: Parsing, points: np.ndarray, notes: list[str]) -> tuple[list[GarmentGuess], list[str]]:
+    """The lower garment and the top of a person in two garments (crop pixels ``points``)."""
+    person = parsing.labels != BACKGROUND
+    share = {label: (parsing.labels == label).sum() / max(person.sum(), 1) for label in (UPPER, LOWER)}
+    garments = []
+    if share[LOWER] >= MIN_GARMENT_SHARE:
+        lower, p_long, p_skirt = _lower(parsing, points, (LOWER,))
+        if p_long is None:
+            notes.append("the lower garment is not seen along the legs: its kind and length are guessed")
+        p_long = 0.5 if p_long is None else p_long
+        p_skirt = SKIRT_PRIOR if p_skirt is None else p_skirt
+        probabilities = {"long-pants": (1 - p_skirt) * p_long, "short-pants": (1 - p_skirt) * (1 - p_long),
+                         "long-skirt": p_skirt * p_long, "short-skirt": p_skirt * (1 - p_long)}
+        garments.append(GarmentGuess("lower", LOWER, _ranked(probabilities), lower))
+    else:
+        notes.append("no lower garment in the picture (the legs are out of frame or bare)")
+    if share[UPPER] >= MIN_GARMENT_SHARE:
+        sleeves, p_sleeve = _sleeves(parsing, points, (UPPER,))
+        names = {"long": "long-sleeve-top", "short": "short-sleeve-top", "none": "sleeveless-top"}
+        garments.append(GarmentGuess("upper", UPPER, _ranked({names[k]: p for k, p in p_sleeve.items()}), sleeves))
+    else:
+        notes.append("no upper garment in the picture")
+    return garments, notes
