@@ -14,7 +14,10 @@ Measures per picture (256 x 256 pixels):
   in pixels, and the same over the person mask's box height (%);
 - **category**: the classifier's top answer on the whole picture, and on the garment alone (the
   true mask given), against the truth;
-- **garment network** (when its weights are shipped): its mask (``segment_garment`` on the crop
+- **parsing** (``darts.photo.outfit``, issue 44): the garment of the picture's kind (upper, lower,
+  dress) among those read: its category against the truth, its parsed mask against the true
+  garment mask (IoU);
+- **garment network** (the previous method, when its weights are shipped): its mask (``segment_garment`` on the crop
   around the found person) against the true garment mask (IoU), and its category.
 With ``--reconstruct`` (on every ``--every``-th picture), ``darts.regress.pipeline.reconstruct``
 twice with no camera: "oracle", given the true category and the garment's true mask, and "photo",
@@ -118,6 +121,7 @@ def main() -> None:
     from darts.camera import Camera
     from darts.fileio import read_npz
     from darts.photo.fit import fit_body
+    from darts.photo.outfit import KIND_OF, read_outfit
     from darts.photo.person import find_person
     from darts.regress.pipeline import classify_image
 
@@ -162,6 +166,15 @@ def main() -> None:
             height = float(rows_.max() - rows_.min() + 1) if len(rows_) else float(image.shape[0])
             row["joint_error_px"] = float(np.median(error))
             row["joint_error_pct_height"] = 100 * float(np.median(error)) / height
+            start = time.process_time()
+            outfit = read_outfit(image, person, fit, body)
+            row["parsing_s"] = time.process_time() - start
+            kind = KIND_OF[meta["category"]]
+            read = outfit.garment(kind) if outfit else None
+            row["parsing_category"] = read.category if read else None
+            row["parsing_garments"] = [g.category for g in outfit.garments] if outfit else []
+            parsed = outfit.mask(kind) if outfit else np.zeros_like(garment_mask)
+            row["parsing_mask_iou"] = float((parsed & garment_mask).sum() / max((parsed | garment_mask).sum(), 1))
             if network:
                 from darts.photo.garment_net import segment_garment
 
@@ -192,6 +205,12 @@ def main() -> None:
                            for k in ("person_s", "body_fit_s", "classify_s", "garment_s", "oracle_reconstruct_s",
                                      "photo_reconstruct_s") if any(k in r for r in rows)},
     }
+    summary["parsing"] = {
+        "mask_iou_median": float(np.median([r["parsing_mask_iou"] for r in found])) if found else None,
+        "category_accuracy": float(np.mean([r.get("parsing_category") == r["category"] for r in rows])),
+        "category_accuracy_per_category": {
+            c: float(np.mean([r.get("parsing_category") == c for r in rows if r["category"] == c]))
+            for c in sorted({r["category"] for r in rows})}}
     if network:
         summary["garment_network"] = {
             "mask_iou_median": float(np.median([r["garment_mask_iou"] for r in found])),
