@@ -1,7 +1,8 @@
 """DARTs: Deformable Animation Ready Templates for clothing humans.
 
 The library API (``darts.api``, ``docs/api.md``): ``load_body``, ``load_motion``, ``load_garment``,
-``save_garment``, ``pose``, ``template``, ``deform``, ``classify``, ``read_outfit``, ``reconstruct``; simulation is
+``save_garment``, ``pose``, ``template``, ``deform``, ``classify``, ``read_outfit``, ``reconstruct``,
+``reconstruct_outfit``; simulation is
 ``sim.simulate``. Names load their modules on first use. Subpackages: ``darts.body`` (SMPL-format
 body model), ``darts.motion`` (AMASS-format motions), ``darts.templates``, ``darts.dart``,
 ``darts.crdl``, ``darts.regress``. Frames: the body's canonical (rest) frame is Y up, front +Z, left
@@ -13,5 +14,5 @@ from darts.lazy import lazy_exports
 
 __version__ = "0.1.0"
 __getattr__, _API = lazy_exports(__name__, {name: "api" for name in (
-    "load_body", "load_motion", "load_garment", "save_garment", "pose", "template", "deform", "classify", "read_outfit", "reconstruct")})
+    "load_body", "load_motion", "load_garment", "save_garment", "pose", "template", "deform", "classify", "read_outfit", "reconstruct", "reconstruct_outfit")})
 __all__ = ["DartsInputError", "__version__", *_API]

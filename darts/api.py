@@ -192,6 +192,39 @@ def read_outfit(image, body=None):
     return outfit
 
 
+def reconstruct_outfit(image, body=None, garments: Sequence[str] | None = None, betas: Sequence[float] | None = None,
+                       edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False, silhouette: str = "outline",
+                       silhouette_weight: float | None = None, accept_low_confidence: bool = False):
+    """Every garment the person in the photograph ``image`` (a path or [H,W,3] uint8) wears, each a
+    DART fitted through the pose to its own parsed mask on the body fitted once to the person
+    (``garments``: only these kinds, of upper, lower, dress). Returns an ``OutfitReconstruction``:
+    ``.outfit`` (what was read, ``read_outfit``), ``.garments`` (a ``Reconstruction`` each, inner
+    layer first) and ``.save(folder)`` (the outfit folder ``darts-sim`` runs). A picture that is too
+    small, blurred or blank, without a person or without such a garment raises ``DartsInputError``."""
+    from darts.crdl import check_silhouette
+    from darts.photo.outfit import KINDS
+    from darts.regress.pipeline import reconstruct_outfit as run
+
+    wrong = [g for g in garments or [] if g not in KINDS]
+    if wrong:
+        raise DartsInputError(None, f"garments must be of {', '.join(KINDS)}, got {', '.join(map(repr, wrong))}")
+    check_silhouette(silhouette)
+    if not 0.003 <= edge_length <= 0.1:
+        raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
+    picture = read_picture(image)
+    model = load_body(body)
+    if betas is not None and len(betas) > model.num_betas:
+        raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
+    try:
+        return run(picture, model, list(garments) if garments else None, betas=betas, edge_length=edge_length,
+                   progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight,
+                   accept_low_confidence=accept_low_confidence)
+    except DartsInputError as error:
+        if error.source is None and isinstance(image, (str, os.PathLike)):
+            raise DartsInputError(image, error.problem.removeprefix("the picture ")) from None
+        raise
+
+
 def _refuse(image, problem: str | None) -> None:
     """Raise ``DartsInputError`` for the picture ``image`` (a path or an array) when there is a ``problem``."""
     if problem is None:

@@ -192,9 +192,13 @@ class _Dressing:
 def _load_garments(job: SimJob) -> _Dressing:
     from darts.dart.io import load_dart
     from darts.dart.model import MATERIALS, Dart, parse_seam_setting
+    from darts.outfit_folder import outfit_garments
     from sim.outfit import garment_names
 
     given = list(job.garment) if isinstance(job.garment, (list, tuple)) else [job.garment]
+    # An outfit folder (darts reconstruct PHOTO -o OUT_DIR) stands for its garments, inner layer first.
+    given = [part for g in given for part in
+             (outfit_garments(g) if isinstance(g, (str, os.PathLike)) and Path(g).is_dir() else [g])]
     if not given:
         raise DartsInputError(None, "no garment given")
     # A shallow copy is enough: material and seams are replaced below, never changed in place.

@@ -188,3 +188,59 @@ def test_sharpness_tells_the_sample_from_its_blurred_copies():
     for radius in (2, 3):
         assert sharpness(np.asarray(sample.filter(ImageFilter.GaussianBlur(radius)))) < MIN_SHARPNESS
 
+
+
+def _still_motion(path: Path) -> Path:
+    """A three-frame AMASS motion: the body standing in its rest pose."""
+    save_npz(path, poses=np.zeros((3, 156)), trans=np.tile([0.0, 0.0, 1.0], (3, 1)), betas=np.zeros(16),
+             gender=np.array("neutral"), mocap_framerate=np.array(30.0))
+    return path
+
+
+def test_a_photograph_to_an_outfit_folder_that_darts_sim_runs(run_darts, run_sim, tmp_path):
+    """-o OUT_DIR writes one DART per garment seen (the portrait: its jacket), outfit.json in layer
+    order, report.json; darts-sim OUT_DIR runs it and simulates a few frames on the fitted shape."""
+    from darts.outfit_folder import outfit_garments
+
+    folder = tmp_path / "outfit"
+    code, stdout, err = run_darts("reconstruct", PORTRAIT, "-o", folder, "--edge-length", "0.05")
+    assert code == 0, err
+    index = json.loads((folder / "outfit.json").read_text())
+    assert index["garments"] == ["long-sleeve-top.npz"] and index["kinds"] == ["upper"]
+    assert outfit_garments(folder) == [folder / "long-sleeve-top.npz"]
+    dart = load_dart(folder / "long-sleeve-top.npz")
+    assert np.allclose(dart.body_betas, index["betas"]) and np.abs(index["betas"]).max() > 0
+    report = json.loads((folder / "report.json").read_text())
+    assert [g["category"] for g in report["garments"]] == ["long-sleeve-top"]
+    assert "darts-sim" in stdout and "note: no lower garment" in stdout
+    usd, stats = tmp_path / "sim.usdc", tmp_path / "stats.json"
+    code, _, err = run_sim(folder, _still_motion(tmp_path / "still.npz"), "-o", usd, "--settle", "0.1", "--stats", stats,
+                           "--quiet")
+    assert code == 0, err
+    data = json.loads(stats.read_text())
+    assert data["stable"] and len(data["frames"]) == 3 and data["max_penetration"] < 0.02
+
+
+def test_darts_sim_runs_an_outfit_folder_in_its_layer_order(run_sim, tmp_path):
+    """Two shipped garments written as an outfit folder (pants inner) simulate as the outfit of the
+    two given one by one; a folder without outfit.json is one line and exit 2."""
+    from darts.outfit_folder import write_outfit_folder
+
+    folder = tmp_path / "outfit"
+    garments = [(f"{name}.npz", load_dart(SAMPLE.parent / "garments" / f"{name}.npz")) for name in ("long-pants",
+                                                                                                  "short-sleeve-top")]
+    write_outfit_folder(folder, garments, {"layers": "inner first"})
+    motion, stats = _still_motion(tmp_path / "still.npz"), tmp_path / "stats.json"
+    code, _, err = run_sim(folder, motion, "-o", tmp_path / "sim.usdc", "--settle", "0.1", "--stats", stats, "--quiet")
+    assert code == 0, err
+    assert list(json.loads(stats.read_text())["garments"]) == ["long_pants", "short_sleeve_top"]
+    (folder / "outfit.json").unlink()
+    code, stdout, err = run_sim(folder, motion, "-o", tmp_path / "again.usdc")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "without outfit.json" in err, err
+    assert not (tmp_path / "again.usdc").exists()
+
+
+def test_an_outfit_folder_takes_no_mask_camera_or_category(run_darts, tmp_path):
+    code, stdout, err = run_darts("reconstruct", PORTRAIT, "-o", tmp_path / "outfit", "--category", "long-sleeve-top")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "give -o garment.npz" in err, err
+    assert not (tmp_path / "outfit").exists()

@@ -43,6 +43,8 @@ def reconstruct(args) -> int:
 
     if (args.simulate is None) != (args.sim_out is None):
         raise DartsInputError(None, "--simulate MOTION and --sim-out OUT.usdc go together")
+    if not str(args.output).lower().endswith(".npz"):
+        return reconstruct_outfit(args)
     check_output(args.output, (".npz",))
     if args.report:
         check_output(args.report)
@@ -64,6 +66,44 @@ def reconstruct(args) -> int:
           f"the body, {report['times']['total_s']:.1f} s" + ("" if report["silhouette"] else " (no mask: no silhouette term)")
           + (" (garment mask estimated on the fitted body)" if report["mask_estimated"] else "")
           + (" (low confidence, accepted)" if report["low_confidence"] else ""))
+    if args.simulate:
+        command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
+        if args.body:
+            command += ["--body", args.body]
+        return subprocess.run(command).returncode
+    return 0
+
+
+def reconstruct_outfit(args) -> int:
+    """``darts reconstruct PHOTO -o OUT_DIR``: every garment of the photograph, an outfit folder."""
+    from darts import api
+
+    given = [flag for flag, value in (("--mask", args.mask), ("--camera", args.camera), ("--category", args.category))
+             if value]
+    if given:
+        raise DartsInputError(args.output, f"-o OUT_DIR reads every garment of a photograph given alone; {', '.join(given)} "
+                                           "reconstruct one garment: give -o garment.npz")
+    check_output(args.output, directory=True)
+    if args.report:
+        check_output(args.report)
+    if args.sim_out:
+        check_output(args.sim_out, SIM_SUFFIXES)
+    result = api.reconstruct_outfit(args.image, args.body, [args.garment] if args.garment else None, args.betas,
+                                    args.edge_length, progress=True, silhouette=args.silhouette,
+                                    silhouette_weight=args.silhouette_weight,
+                                    accept_low_confidence=args.accept_low_confidence)
+    result.save(args.output, source=str(args.image))
+    if args.report:
+        with atomic_path(args.report) as tmp:
+            tmp.write_text(json.dumps(result.report(), indent=1))
+    for name, garment in zip(result.file_names(), result.garments):
+        report = garment.report
+        print(f"{report['garment']}: {report['category']} ({100 * report['probability']:.1f} %): wrote "
+              f"{args.output}/{name}, {report['vertices']} vertices, lines fitted to "
+              f"{1e3 * report['crdl']['handle_rmse']:.2f} mm, {100 * report['crdl']['penetration']:.2f} % inside the body")
+    for note in result.outfit.notes:
+        print(f"note: {note}")
+    print(f"outfit of {len(result.garments)}, inner layer first: darts-sim {args.output} MOTION")
     if args.simulate:
         command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
         if args.body:
@@ -94,7 +134,10 @@ def add_parsers(groups) -> None:
                     "--mask the garment network gives the garment's mask and category; on the fitted body the lines "
                     "are regressed through its pose and the template fitted through it (docs/reconstruction.md).")
     parser.add_argument("image", metavar="IMAGE", help="RGB picture (PNG/JPEG), 224 x 224 or resized to it")
-    parser.add_argument("-o", "--output", required=True, metavar="garment.npz")
+    parser.add_argument("-o", "--output", required=True, metavar="garment.npz|OUT_DIR",
+                        help="garment.npz: one DART; OUT_DIR (a folder): every garment of a photograph given alone, "
+                             "one DART each, fitted on the same body, with outfit.json (layer order) and report.json: "
+                             "darts-sim OUT_DIR MOTION runs them as one outfit")
     parser.add_argument("--mask", metavar="MASK", help="garment mask, the image's size (white = garment): the CRDL's "
                         "silhouette term, and the classifier sees the garment alone")
     parser.add_argument("--camera", metavar="camera.json", help="the picture's camera (docs/crdl.md)")
@@ -102,7 +145,7 @@ def add_parsers(groups) -> None:
     parser.add_argument("--category", help="skip the classifier")
     parser.add_argument("--garment", choices=("upper", "lower", "dress"),
                         help="of a photograph given alone, the garment to reconstruct (default: the outer one, the top "
-                             "or the dress); the report lists every garment seen")
+                             "or the dress; with -o OUT_DIR every garment); the report lists every garment seen")
     parser.add_argument("--accept-low-confidence", action="store_true",
                         help="go on when the classifier's best guess is under 50 %% (the report says low_confidence); "
                              "without it such a picture is refused")

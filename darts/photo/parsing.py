@@ -53,6 +53,7 @@ ZONE_PRIORS = {
 #: skin's chroma (Lab units) and hue range (degrees): ``skin_coloured``
 SKIN_CHROMA = 6.0
 SKIN_HUE = (15.0, 95.0)
+GREY_CHROMA = 2.0
 OTHER_LOG_DENSITY = -float(np.log(100 * 200 * 200))
 #: the lower cloth is the upper's when the upper's model explains its colours within this many nats
 #: a pixel of its own model (and the other way round)
@@ -165,11 +166,13 @@ def skin_coloured(colours: np.ndarray) -> np.ndarray:
 def _skin_model(colours: np.ndarray, face: np.ndarray, parts: np.ndarray) -> tuple[ColourModel | None, np.ndarray]:
     """(skin's colour model, the pixels it was fitted to): the face disc (unless under half of it is
     skin-coloured: a head seen from behind) and the hands, skin-coloured pixels only, the farthest
-    30 % from their median (chroma) left out: shadows, lips, a bag."""
-    if face.any() and skin_coloured(colours[face]).mean() < 0.5:
-        face = np.zeros_like(face)
+    30 % from their median (chroma) left out: shadows, lips, a bag. In a grey picture (the person's
+    median chroma under ``GREY_CHROMA``) no colour is skin's: the face and hands as they are."""
     source = (face & (parts >= 0)) | _zone_mask(parts, "hand")
-    source &= skin_coloured(colours)
+    if np.median(np.hypot(colours[parts >= 0][:, 1], colours[parts >= 0][:, 2])) >= GREY_CHROMA:
+        if face.any() and skin_coloured(colours[face]).mean() < 0.5:
+            source = _zone_mask(parts, "hand")
+        source &= skin_coloured(colours)
     samples = colours[source]
     if len(samples) < 8:
         return None, source

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -91,6 +92,33 @@ def _person(image: np.ndarray, body, times: dict):
 
 
 @dataclass
+class Photograph:
+    """What a photograph given alone shows: its ``person`` (None: none found), the ``body_fit`` to
+    them, their ``outfit`` (every garment parsed, ``darts.photo.outfit``; None when not parsed) and
+    the ``times`` of these stages."""
+
+    person: object | None
+    body_fit: object | None
+    outfit: object | None
+    times: dict
+
+
+def read_photograph(image: np.ndarray, body, parse: bool = True) -> Photograph:
+    """The person in ``image`` [H,W,3] uint8, ``body`` (a ``BodyModel``) fitted to them and, with
+    ``parse``, every garment they wear."""
+    times: dict = {}
+    person, body_fit = _person(image, body, times)
+    outfit = None
+    if person is not None and parse:
+        from darts.photo.outfit import read_outfit
+
+        mark = time.perf_counter()
+        outfit = read_outfit(image, person, body_fit, body)
+        times["parsing_s"] = time.perf_counter() - mark
+    return Photograph(person, body_fit, outfit, times)
+
+
+@dataclass
 class Reconstruction:
     dart: object
     report: dict
@@ -101,7 +129,7 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
                 mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH,
                 progress: bool = False, silhouette_term: str = "outline",
                 silhouette_weight: float | None = None, accept_low_confidence: bool = False,
-                garment: str | None = None) -> Reconstruction:
+                garment: str | None = None, photograph: Photograph | None = None) -> Reconstruction:
     """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
     switches the CRDL's silhouette term on and shows the classifier the garment alone; ``progress``
     shows the CRDL's steps; ``silhouette_term``: which (``darts.crdl.SILHOUETTE_WEIGHTS``),
@@ -120,7 +148,8 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     garment it shows is read, with its category from what is seen (sleeve length, the legs); the
     one reconstructed is ``garment`` (upper, lower, dress; default the outer one: the top or the
     dress), or the one of ``category``'s kind, with its parsed mask; the report's ``outfit`` lists
-    them all."""
+    them all. ``photograph``: the photograph already read (``read_photograph``), so that its
+    garments are reconstructed one by one without reading it again."""
     from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
@@ -133,19 +162,19 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     problem = picture_problem(image, mask)
     if problem:
         raise DartsInputError(None, f"the picture {problem}")
-    times, started = {}, time.perf_counter()
+    started = time.perf_counter()
     classified, looked = category is None, camera is None
-    person, body_fit = _person(image, body, times) if looked else (None, None)
+    if looked and photograph is None:
+        photograph = read_photograph(image, body, parse=mask is None)
+    person, body_fit, outfit = (photograph.person, photograph.body_fit, photograph.outfit) if looked else (None, None, None)
+    times = dict(photograph.times) if looked else {}
     if looked and person is None and mask is None and not accept_low_confidence:
         raise DartsInputError(None, f"the picture {person_problem()}")
     low_confidence = looked and mask is None and person is None
-    given_mask, garment_ranked, outfit, kind = mask is not None, None, None, None
+    given_mask, garment_ranked, kind = mask is not None, None, None
     if person is not None and mask is None:  # a photograph given alone: every garment it shows
-        from darts.photo.outfit import KIND_OF, read_outfit
+        from darts.photo.outfit import KIND_OF
 
-        mark = time.perf_counter()
-        outfit = read_outfit(image, person, body_fit, body)
-        times["parsing_s"] = time.perf_counter() - mark
         kind = garment or (KIND_OF[category] if category else None)
         if kind is None:  # the outer garment: the top or the dress, else what there is
             kind = next((g.kind for g in reversed(outfit.garments)), "upper") if outfit else "upper"
@@ -222,3 +251,61 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
               "vertices": len(dart.vertices), "times": {k: round(v, 3) for k, v in times.items()}}
     return Reconstruction(dart, report, mask)
 
+
+
+@dataclass
+class OutfitReconstruction:
+    """Every garment reconstructed from one photograph: the ``outfit`` read (``darts.photo.outfit``),
+    the ``garments`` (``Reconstruction`` each, inner layer first)."""
+
+    outfit: object
+    garments: list[Reconstruction]
+
+    def file_names(self) -> list[str]:
+        """Each garment's file in an outfit folder: its category."""
+        return [f"{g.report['category']}.npz" for g in self.garments]
+
+    def save(self, folder, source: str | None = None) -> list:
+        """Write the outfit folder (``darts.outfit_folder``): each DART, ``report.json`` (every
+        garment's report) and ``outfit.json``; the paths written."""
+        import json
+
+        from darts.fileio import atomic_path
+        from darts.outfit_folder import write_outfit_folder
+
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        with atomic_path(folder / "report.json") as tmp:
+            tmp.write_text(json.dumps(self.report(), indent=1))
+        index = {"layers": "inner first", "source": source, "categories": [g.report["category"] for g in self.garments],
+                 "kinds": [g.report["garment"] for g in self.garments], "notes": self.outfit.notes,
+                 "betas": self.garments[0].dart.body_betas.tolist() if self.garments else None}
+        return write_outfit_folder(folder, list(zip(self.file_names(), (g.dart for g in self.garments))), index) + [
+            folder / "report.json"]
+
+    def report(self) -> dict:
+        return {"outfit": self.outfit.as_dict(), "garments": [g.report for g in self.garments]}
+
+
+def reconstruct_outfit(image: np.ndarray, body, kinds: list[str] | None = None, **options) -> OutfitReconstruction:
+    """Every garment of the photograph ``image`` [H,W,3] uint8 (or those of ``kinds``: upper, lower,
+    dress), each reconstructed on the body fitted once to the person (``reconstruct``'s
+    ``options``: betas, edge_length, progress, silhouette_term, silhouette_weight,
+    accept_low_confidence), inner layer first. No person, or no garment of ``kinds`` seen, raises
+    ``DartsInputError``."""
+    from darts.regress.checks import person_problem, picture_problem
+
+    problem = picture_problem(image, None)
+    if problem:
+        raise DartsInputError(None, f"the picture {problem}")
+    photograph = read_photograph(image, body)
+    if photograph.person is None:
+        raise DartsInputError(None, f"the picture {person_problem(given_alone='give --mask for a picture of a garment alone')}")
+    seen = [g.kind for g in photograph.outfit.garments] if photograph.outfit else []
+    wanted = [k for k in seen if kinds is None or k in kinds]
+    if not wanted:
+        said = ", ".join(f"{g.kind} ({g.category})" for g in photograph.outfit.garments) if seen else "none"
+        raise DartsInputError(None, f"the picture shows a person but no {' or '.join(kinds or [''])} garment "
+                                    f"(garments seen: {said})".replace("no  garment", "no garment"))
+    return OutfitReconstruction(photograph.outfit,
+                                [reconstruct(image, body, garment=kind, photograph=photograph, **options) for kind in wanted])
