@@ -8,7 +8,7 @@ import pytest
 
 from darts.body.segmentation import PART_INDEX, body_segmentation
 from darts.camera import Camera
-from darts.photo.attributes import ARM, LEG, _project, garments_seen
+from darts.photo.attributes import ARM, LEG, _point_at, _project, garments_seen
 from darts.photo.fit import FLIP, landmark_table
 from darts.photo.parsing import DRESS, LOWER, UPPER, parse_person, part_image
 from darts.photo.person import LANDMARKS
@@ -64,11 +64,16 @@ def _dress_up(scene, sleeve: float, hem: float | None, dress: bool = False):
         lower = np.isin(part, ["hips"])
         for side in ("left", "right"):
             lower |= np.isin(part, [f"{side}_thigh", f"{side}_calf"]) & (_limb_s(landmarks, side, LEG) < hem)
-    if dress:
+    if dress:  # the skirt spans the legs from the hips to the hem, a little wider than they are
+        from matplotlib.path import Path as Polygon
+        from scipy import ndimage
+
         left, right = (np.array([landmarks[LANDMARKS.index(f"{side}_{j}")] for j in LEG]) for side in ("left", "right"))
+        steps = np.linspace(0.0, hem, 12)
+        outline = [_point_at(left, t) for t in steps] + [_point_at(right, t) for t in steps[::-1]]
         rows, cols = np.mgrid[:HEIGHT, :WIDTH]
-        top, bottom = left[0][1], left[0][1] + hem * 2 * (left[1][1] - left[0][1])
-        between = (rows >= top) & (rows <= bottom) & (cols >= right[0][0]) & (cols <= left[0][0])
+        between = Polygon(np.array(outline)).contains_points(np.stack([cols.ravel() + 0.5, rows.ravel() + 0.5], 1))
+        between = ndimage.binary_dilation(between.reshape(HEIGHT, WIDTH), iterations=4) & (rows < _point_at(left, hem)[1])
         lower |= between
         person = person | between
         upper, lower = upper | lower, np.zeros_like(lower)

@@ -66,12 +66,7 @@ def reconstruct(args) -> int:
           f"the body, {report['times']['total_s']:.1f} s" + ("" if report["silhouette"] else " (no mask: no silhouette term)")
           + (" (garment mask estimated on the fitted body)" if report["mask_estimated"] else "")
           + (" (low confidence, accepted)" if report["low_confidence"] else ""))
-    if args.simulate:
-        command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
-        if args.body:
-            command += ["--body", args.body]
-        return subprocess.run(command).returncode
-    return 0
+    return _simulate(args)
 
 
 def reconstruct_outfit(args) -> int:
@@ -104,12 +99,17 @@ def reconstruct_outfit(args) -> int:
     for note in result.outfit.notes:
         print(f"note: {note}")
     print(f"outfit of {len(result.garments)}, inner layer first: darts-sim {args.output} MOTION")
-    if args.simulate:
-        command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
-        if args.body:
-            command += ["--body", args.body]
-        return subprocess.run(command).returncode
-    return 0
+    return _simulate(args)
+
+
+def _simulate(args) -> int:
+    """With --simulate: darts-sim on what was written (a DART or an outfit folder), its exit code."""
+    if not args.simulate:
+        return 0
+    command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
+    if args.body:
+        command += ["--body", args.body]
+    return subprocess.run(command).returncode
 
 
 def add_silhouette_options(parser) -> None:

@@ -7,19 +7,25 @@ parts: upper arm, forearm and hand; thigh, calf and foot) is projected on to the
 s in [0, 1] (0 at the shoulder or hip, 0.5 at the elbow or knee, 1 at the wrist or ankle, linear
 along each bone). In ``BINS`` bins of s, the *coverage* is the share of the bin's cloth and skin
 pixels that are cloth (the garment's label). The garment's **end** along the limb is where
-coverage first falls under one half for two bins running (1 when it never does; the last bin in
-the picture when the limb leaves it covered: ``beyond_picture``).
+coverage first falls under one half for two bins running, k, refined by the coverages on either
+side: s = (k - 1 + c_{k-1} + c_k) / BINS (1 when it never falls; the last bin in the picture
+when the limb leaves it covered: ``beyond_picture``).
 
-- **Sleeves**: the two arms' ends averaged (an arm out of sight left out); P(none) = sigma((0.12 -
+A limb bare where it first comes into view (past s = 0.2) has its end hidden and is left out; of
+two limbs the shorter end counts (``_garment_end``).
+
+- **Sleeves**: the arms' end (an arm out of sight left out); P(none) = sigma((0.12 -
   s) / 0.03), P(long) = sigma((s - 0.45) / 0.04) (a sleeve to the elbow or further: rolled and 3/4
   sleeves are long sleeves), P(short) the rest; a sleeve covered out of the picture from at least
   s = 0.3 is long at 0.6 or more.
 - **Lower garment's length**: the legs' ends; P(long) = sigma((s - 0.55) / 0.05) (the knee is 0.5).
-- **Skirt or pants**: between the legs, the middle 40 % of the segment joining the two legs'
-  points at the same s, sampled from s = 0.1 to the hem: the share of those pixels that are the
-  garment's cloth (a skirt fills the gap, trousers leave background or skin); P(skirt) =
-  sigma((fill - 0.5) / 0.1); ``SKIRT_PRIOR`` when the legs are too close for a gap to show. One
-  cloth from the shoulders down with no skirt shown below is a suit: a top and trousers.
+- **Skirt or pants**: the gap between the legs down to the hem — inside the polygon of the two
+  legs' polylines, off the fitted body's silhouette (below its crotch) — and the share of it that
+  is the garment's cloth against background (a skirt fills the gap, trousers leave it open; skin
+  there is a leg the fit put elsewhere); P(skirt) = sigma((fill - 0.65) / 0.06); ``SKIRT_PRIOR``
+  when no gap shows (legs together, crossed or seen from the side, or a hem above s = 0.45, where
+  the legs part). One cloth from the shoulders down is a dress unless the gap is clearly open
+  (fill under 0.35): then a suit, a top and trousers.
 """
 from __future__ import annotations
 
@@ -39,10 +45,13 @@ MIN_GARMENT_SHARE = 0.02
 #: a limb's pixels lie within this share of its length from its polyline (a torso pixel beside a
 #: hanging arm is not the arm's)
 REACH = 0.12
-#: a leg's width at s = 0, 0.5, 1 over the distance between the hip landmarks, and the least gap
-#: between two legs (same unit) that says anything of what fills it
-LEG_WIDTH = (1.0, 0.6, 0.45)
-MIN_GAP = 0.1
+#: the least gap between the legs (crop pixels, of 256) that says anything of what fills it
+MIN_GAP_PIXELS = 25
+#: the share of cloth in the gap between the legs at which a skirt and trousers are as likely, and
+#: the hem (s) above which there is a gap to read
+SKIRT_FILL, MIN_GAP_HEM = 0.65, 0.45
+#: one cloth from the shoulders down is taken for a suit (a top and trousers) only under this fill
+SUIT_FILL = 0.35
 #: P(skirt) when no gap between the legs shows
 SKIRT_PRIOR = 0.35
 ARM = ("shoulder", "elbow", "wrist")
@@ -96,10 +105,14 @@ def limb_coverage(parsing: Parsing, polyline: np.ndarray, parts: list[str], clot
     seen = np.flatnonzero(~np.isnan(coverage))
     if len(seen) < MIN_SEEN_BINS:
         return LimbCoverage(coverage, None, False, len(seen))
+    if seen[0] > 2 and coverage[seen[0]] < 0.5:  # bare where it comes into view: its end is hidden
+        return LimbCoverage(coverage, None, False, len(seen))
     end = None
     for k in seen:
         if coverage[k] < 0.5 and (k + 1 >= BINS or np.isnan(coverage[k + 1]) or coverage[k + 1] < 0.5):
-            end = k / BINS
+            # between bins: the last covered bin's bare share back, the first bare bin's cloth on
+            before = coverage[k - 1] if k > 0 and not np.isnan(coverage[k - 1]) else 1.0
+            end = (k - 1 + before + coverage[k]) / BINS if k > 0 else coverage[k] / BINS
             break
     beyond = False
     if end is None:
@@ -114,39 +127,47 @@ def _limb(landmarks: np.ndarray, side: str, joints: tuple[str, ...]) -> np.ndarr
     return np.array([landmarks[LANDMARKS.index(f"{side}_{j}")] for j in joints])
 
 
-def _mean_end(limbs: list[LimbCoverage]) -> tuple[float | None, bool]:
+def _garment_end(limbs: list[LimbCoverage]) -> tuple[float | None, bool]:
+    """(the garment's end: the shorter of the limbs' measured ends, whether it runs out of the
+    picture). The shorter: a limb seen over other cloth of the same garment (an arm across the
+    torso, a leg behind a skirt) reads too long, never too short."""
     seen = [limb for limb in limbs if limb.end is not None]
     if not seen:
         return None, False
-    return float(np.mean([limb.end for limb in seen])), all(limb.beyond_picture for limb in seen)
+    shortest = min(seen, key=lambda limb: limb.end)
+    return float(shortest.end), shortest.beyond_picture
+
+
+def _point_at(leg: np.ndarray, s: float) -> np.ndarray:
+    """The point at ``s`` along the two-bone polyline ``leg`` [3,2]."""
+    bone = min(int(s * 2), 1)
+    return leg[bone] + (s * 2 - bone) * (leg[bone + 1] - leg[bone])
 
 
 def between_legs_fill(parsing: Parsing, legs: list[np.ndarray], cloth: tuple[int, ...], hem: float) -> float | None:
-    """The share of cloth pixels in the gap between the two legs from s = 0.1 to ``hem`` (module
-    docstring), or None when the legs are too close for a gap to show (together, or crossed) or
-    nothing between them is in the picture. A leg's width at s is taken as ``LEG_WIDTH`` (s) times
-    the distance between the hips; where the legs' centre lines are further apart than that, the
-    middle of the gap is sampled."""
-    labels, size = parsing.labels, len(parsing.labels)
-    hips = np.linalg.norm(legs[0][0] - legs[1][0])
-    samples = []
-    for s in np.linspace(0.1, max(hem, 0.15), 8):
-        bone = min(int(s * 2), 1)
-        t = s * 2 - bone
-        ends = [leg[bone] + t * (leg[bone + 1] - leg[bone]) for leg in legs]
-        apart = np.linalg.norm(ends[1] - ends[0])
-        gap = apart - np.interp(s, (0.0, 0.5, 1.0), LEG_WIDTH) * hips
-        if gap < MIN_GAP * hips:
-            continue
-        half = 0.5 * gap / apart
-        for u in np.linspace(0.5 - half, 0.5 + half, 7):
-            point = ends[0] + u * (ends[1] - ends[0])
-            col, row = int(point[0]), int(point[1])
-            if 0 <= row < size and 0 <= col < size and parsing.labels[row, col] != OTHER:
-                samples.append(labels[row, col])
-    if len(samples) < 7:
+    """The share of the ``cloth`` labels in the gap between the legs down to ``hem`` (module
+    docstring), or None when under ``MIN_GAP_PIXELS`` of gap show (legs together, crossed or seen
+    from the side). The gap: the pixels inside the polygon of the two legs' polylines from the hips
+    to ``hem`` that the fitted body does not cover (its silhouette grown by 2 pixels: below the
+    crotch, between the thighs). Skin there is left out (a leg the fit put elsewhere), so the share
+    is of cloth against background."""
+    from matplotlib.path import Path as Polygon
+    from scipy import ndimage
+
+    if hem < MIN_GAP_HEM:  # a short garment ends about where the legs part: no gap to read
         return None
-    return float(np.isin(np.array(samples), cloth).mean())
+    steps = np.linspace(0.0, hem, 12)
+    outline = [_point_at(legs[0], t) for t in steps] + [_point_at(legs[1], t) for t in steps[::-1]]
+    size = len(parsing.labels)
+    rows, cols = np.mgrid[:size, :size]
+    inside = Polygon(np.array(outline)).contains_points(np.stack([cols.ravel() + 0.5, rows.ravel() + 0.5], 1))
+    body = ndimage.binary_dilation(parsing.body_parts >= 0, iterations=2)
+    gap = inside.reshape(size, size) & ~body & parsing.in_picture()
+    covered = gap & np.isin(parsing.labels, cloth)
+    seen = covered | (gap & (parsing.labels == BACKGROUND))
+    if seen.sum() < MIN_GAP_PIXELS:
+        return None
+    return float(covered.sum() / seen.sum())
 
 
 def _sleeve_probabilities(end: float) -> dict[str, float]:
@@ -188,7 +209,7 @@ def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) ->
     arms = {side: limb_coverage(parsing, _limb(landmarks, side, ARM), [f"{side}_upper_arm", f"{side}_forearm",
                                                                        f"{side}_hand"], cloth)
             for side in ("left", "right")}
-    end, beyond = _mean_end(list(arms.values()))
+    end, beyond = _garment_end(list(arms.values()))
     probabilities = _sleeve_probabilities(end) if end is not None else {"none": 1 / 3, "short": 1 / 3, "long": 1 / 3}
     if beyond and end >= 0.3 and probabilities["long"] < 0.6:  # covered out of the picture: at least this long
         probabilities = {"none": 0.0, "short": 0.4, "long": 0.6}
@@ -198,51 +219,65 @@ def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) ->
     return evidence, probabilities
 
 
-def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) -> tuple[dict, float | None, float | None]:
-    """(evidence, P(long), P(skirt)) of the garment below the waist labelled ``cloth``."""
+def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...],
+           read_gap: bool = True) -> tuple[dict, float | None, float | None, float | None]:
+    """(evidence, P(long), P(skirt), the fill between the legs) of the garment below the waist
+    labelled ``cloth``."""
     polylines = {side: _limb(landmarks, side, LEG) for side in ("left", "right")}
     legs = {side: limb_coverage(parsing, polylines[side], [f"{side}_thigh", f"{side}_calf", f"{side}_foot"], cloth)
             for side in ("left", "right")}
-    end, beyond = _mean_end(list(legs.values()))
-    fill = between_legs_fill(parsing, list(polylines.values()), cloth, end if end is not None else 0.5)
+    end, beyond = _garment_end(list(legs.values()))
+    fill = between_legs_fill(parsing, list(polylines.values()), cloth, end if end is not None else 0.5) if read_gap else None
     p_long = None if end is None else float(expit((end - 0.55) / 0.05))
     if beyond and p_long is not None and p_long < 0.6:
         p_long = 0.6  # the hem is out of the picture: at least this long, more likely long than short
-    p_skirt = None if fill is None else float(expit((fill - 0.5) / 0.1))
+    p_skirt = None if fill is None else float(expit((fill - SKIRT_FILL) / 0.06))
     evidence = {"hem_end": None if end is None else round(end, 3), "hem_beyond_picture": beyond,
                 "between_legs_fill": None if fill is None else round(fill, 3),
                 "legs": {k: v.as_dict() for k, v in legs.items()}}
-    return evidence, p_long, p_skirt
+    return evidence, p_long, p_skirt, fill
 
 
-def garments_seen(parsing: Parsing, landmarks: np.ndarray) -> tuple[list[GarmentGuess], list[str]]:
+def garments_seen(parsing: Parsing, landmarks: np.ndarray,
+                  visibility: np.ndarray | None = None) -> tuple[list[GarmentGuess], list[str]]:
     """(every visible garment, outermost last: the lower garment, then the top or the dress;
     notes on what could not be seen) of a parsed person whose BlazePose ``landmarks`` [33,2] are in
-    picture pixels (module docstring)."""
+    picture pixels, with their ``visibility`` [33] (module docstring)."""
     points = parsing.to_crop(landmarks)
     person = parsing.labels != BACKGROUND
     share = {label: (parsing.labels == label).sum() / max(person.sum(), 1) for label in (UPPER, LOWER, DRESS)}
     garments, notes = [], []
     if share[DRESS] >= MIN_GARMENT_SHARE:
-        lower, _, p_skirt = _lower(parsing, points, (DRESS,))
-        if (SKIRT_PRIOR if p_skirt is None else p_skirt) < 0.5:  # one colour, trousers below: a suit, two garments
+        lower, _, _, fill = _lower(parsing, points, (DRESS,), _knees_seen(visibility))
+        if fill is not None and fill < SUIT_FILL:  # one colour, trousers seen below: a suit, two garments
             notes.append("one cloth from the shoulders to the legs but trousers below: taken as a top and trousers")
-            return _separates(parsing.split_one_piece(), points, notes)
+            return _separates(parsing.split_one_piece(), points, notes, visibility)
         sleeves, p_sleeve = _sleeves(parsing, points, (DRESS,))
         attributes = {**sleeves, **lower, "one_piece": parsing.evidence}
         names = {"long": "long-sleeve-dress", "short": "short-sleeve-dress", "none": "sleeveless-dress"}
         garments.append(GarmentGuess("dress", DRESS, _ranked({names[k]: p for k, p in p_sleeve.items()}), attributes))
         return garments, notes
-    return _separates(parsing, points, notes)
+    return _separates(parsing, points, notes, visibility)
 
 
-def _separates(parsing: Parsing, points: np.ndarray, notes: list[str]) -> tuple[list[GarmentGuess], list[str]]:
+def _knees_seen(visibility: np.ndarray | None) -> bool:
+    """Whether BlazePose sees both knees (visibility at least one half; without visibilities, yes):
+    else the legs' landmarks are guessed (out of frame, hidden) and no gap between them is read."""
+    from darts.photo.person import LANDMARKS
+
+    if visibility is None:
+        return True
+    return min(visibility[LANDMARKS.index("left_knee")], visibility[LANDMARKS.index("right_knee")]) >= 0.5
+
+
+def _separates(parsing: Parsing, points: np.ndarray, notes: list[str],
+               visibility: np.ndarray | None) -> tuple[list[GarmentGuess], list[str]]:
     """The lower garment and the top of a person in two garments (crop pixels ``points``)."""
     person = parsing.labels != BACKGROUND
     share = {label: (parsing.labels == label).sum() / max(person.sum(), 1) for label in (UPPER, LOWER)}
     garments = []
     if share[LOWER] >= MIN_GARMENT_SHARE:
-        lower, p_long, p_skirt = _lower(parsing, points, (LOWER,))
+        lower, p_long, p_skirt, _ = _lower(parsing, points, (LOWER,), _knees_seen(visibility))
         if p_long is None:
             notes.append("the lower garment is not seen along the legs: its kind and length are guessed")
         p_long = 0.5 if p_long is None else p_long

@@ -55,7 +55,7 @@ def read_outfit(image: np.ndarray, person, fit, body) -> PhotoOutfit | None:
                            np.asarray(body.faces), body_segmentation(body), fit.posed_camera)
     if parsing is None:
         return None
-    garments, notes = garments_seen(parsing, person.landmarks)
+    garments, notes = garments_seen(parsing, person.landmarks, person.visibility)
     parsing = _as_read(parsing, garments)
     return PhotoOutfit(parsing, garments, notes)
 

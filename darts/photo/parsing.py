@@ -12,9 +12,10 @@ lower garment, one-piece (dress), skin, face and hair, other — from what the b
       -> per pixel, log p(colour | class) + log prior(class | zone) (``ZONE_PRIORS``: a thigh is
          lower cloth or skin, an upper arm upper cloth or skin, ...), smoothed over the picture
          (Gaussian, ``SMOOTH`` pixels) and the best class taken
-      -> **one piece or two**: the lower cloth's colours explained by the upper cloth's model about
-         as well as by its own (``ONE_PIECE_NATS``), and cloth continuous from the torso across the
-         hips (no skin or background band at the waist): a dress; its two labels become one.
+      -> **one piece or two**: the lower cloth's colours explained by the upper cloth's model
+         within ``ONE_PIECE_NATS`` a pixel (median) of its own, and the upper's by the lower's
+         within twice that (a top may show more colours than a skirt): one cloth, whose two labels
+         become one (``darts.photo.attributes`` then tells a dress from a suit by the legs).
 
 Everything runs on a square crop around the person resampled to ``SIZE`` pixels (the labels are
 drawn back to the picture's pixels); arrays are [row, column], the picture's axes.
@@ -73,11 +74,13 @@ PART_ZONE = np.array([ZONES.index(zone_of(name)) for name in PART_NAMES])
 class Parsing:
     """The labels of a person's pixels on the crop (``crop``, ``SIZE`` pixels): ``labels`` [S,S]
     (``LABEL_NAMES``), ``parts`` [S,S] the nearest body part of each person pixel (-1 off the
-    person), and the evidence of the one-piece decision."""
+    person), ``body_parts`` the fitted body's own silhouette by part, and the evidence of the
+    one-piece decision."""
 
     crop: Crop
     labels: np.ndarray
     parts: np.ndarray
+    body_parts: np.ndarray  # [S,S] the fitted body's part seen at each pixel (-1: off the body)
     one_piece: bool
     picture_size: tuple[int, int]  # (width, height) of the picture the crop was taken from
     evidence: dict = field(default_factory=dict)
@@ -94,6 +97,13 @@ class Parsing:
     def mask(self, label: int, width: int, height: int) -> np.ndarray:
         """The pixels of ``label`` in the picture [height, width] bool."""
         return self.crop.to_picture((self.labels == label).astype(np.float32), width, height) > 0.5
+
+    def in_picture(self) -> np.ndarray:
+        """[S,S] bool: the crop's pixels that lie in the picture (a crop may reach past its edges)."""
+        k = self.crop.side / SIZE
+        u = self.crop.x + (np.arange(SIZE) + 0.5) * k
+        v = self.crop.y + (np.arange(SIZE) + 0.5) * k
+        return ((v >= 0) & (v < self.picture_size[1]))[:, None] & ((u >= 0) & (u < self.picture_size[0]))[None, :]
 
     def at_picture_bottom(self, pixels: np.ndarray) -> bool:
         """Whether any of ``pixels`` [S,S] bool lies on the picture's bottom rows (within 1 % of the
@@ -245,7 +255,7 @@ def parse_person(image: np.ndarray, person_mask: np.ndarray, landmarks: np.ndarr
     if one_piece:
         labels[(labels == UPPER) | (labels == LOWER)] = DRESS
     evidence["skin_samples"] = int(skin_source.sum())
-    return Parsing(crop, labels, parts, one_piece, (image.shape[1], image.shape[0]), evidence)
+    return Parsing(crop, labels, parts, seen, one_piece, (image.shape[1], image.shape[0]), evidence)
 
 
 def _one_piece(upper: ColourModel | None, lower: ColourModel | None, colours: np.ndarray, upper_samples: np.ndarray,
