@@ -3,6 +3,8 @@
 known extents: the labels, the sleeve and hem ends and the categories must come back."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -120,3 +122,32 @@ def test_one_cloth_filling_the_gap_between_the_legs_is_a_dress(scene):
     assert parsing.one_piece and [(g.kind, g.category) for g in garments] == [("dress", "sleeveless-dress")]
     assert _iou(parsing.mask(DRESS, WIDTH, HEIGHT), dress) > 0.85
     assert garments[0].attributes["between_legs_fill"] > 0.8
+
+
+def test_lengths_read_place_the_lines_at_the_measured_ends(scene):
+    """A top read with sleeves to s = 0.7 and a hem at s = 0.35 down the body's middle line (a cropped
+    top): its cuffs move out along the arms to the point 40 % of the way from elbow to wrist, its hem
+    up to that level; an end that runs out of the picture only lengthens."""
+    from darts.dart.io import load_dart
+    from darts.photo.lengths import ARM, _chain, length_targets, place_lines, point_at, rest_landmarks
+    from darts.regress.posed_lines import template_lines
+    from darts.templates.categories import CATEGORIES
+
+    body = scene[0]
+    template = load_dart(Path(__file__).parents[1] / "scenes" / "garments" / "short-sleeve-top.npz")
+    names = CATEGORIES["short-sleeve-top"].line_names
+    lines = dict(zip(names, template_lines(template, "short-sleeve-top")))
+    centre = template.vertices.mean(0)
+    attributes = {"sleeve_end": 0.7, "top_hem_end": 0.35}
+    targets = length_targets("short-sleeve-top", attributes, body, None)
+    placed, report = place_lines(lines, targets, centre)
+    points = rest_landmarks(body, None)
+    wrist_side = point_at(_chain(points, "left", ARM), 0.7)
+    assert np.allclose(targets["left_cuff"]["point"], wrist_side)
+    assert abs(placed["left_cuff"].mean(0)[0] - wrist_side[0]) < 0.02  # the arm runs along +X at rest
+    assert report["left_cuff"]["moved_cm"] > 10 and report["hem"]["moved_cm"] < -5
+    assert placed["hem"].mean(0)[1] == pytest.approx(targets["hem"]["point"][1], abs=0.01)
+    assert np.allclose(placed["neckline"], lines["neckline"])
+    beyond = length_targets("short-sleeve-top", {"sleeve_end": 0.1, "sleeve_beyond_picture": True}, body, None)
+    kept, report = place_lines(lines, beyond, centre)
+    assert report["left_cuff"]["moved_cm"] == 0 and np.allclose(kept["left_cuff"], lines["left_cuff"])

@@ -19,6 +19,8 @@ two limbs the shorter end counts (``_garment_end``).
   sleeves are long sleeves), P(short) the rest; a sleeve covered out of the picture from at least
   s = 0.3 is long at 0.6 or more.
 - **Lower garment's length**: the legs' ends; P(long) = sigma((s - 0.55) / 0.05) (the knee is 0.5).
+- **A top's length**: its end down the body's middle line (``torso_line``: shoulders, hips,
+  knees), measured the same way (``top_hem_end``).
 - **Skirt or pants**: the gap between the legs down to the hem — inside the polygon of the two
   legs' polylines, off the fitted body's silhouette (below its crotch) — and the share of it that
   is the garment's cloth against background (a skirt fills the gap, trousers leave it open; skin
@@ -45,6 +47,8 @@ MIN_GARMENT_SHARE = 0.02
 #: a limb's pixels lie within this share of its length from its polyline (a torso pixel beside a
 #: hanging arm is not the arm's)
 REACH = 0.12
+#: the same for the body's middle line (the torso is wider than a limb)
+TORSO_REACH = 0.15
 #: the least gap between the legs (crop pixels, of 256) that says anything of what fills it
 MIN_GAP_PIXELS = 25
 #: the share of cloth in the gap between the legs at which a skirt and trousers are as likely, and
@@ -87,17 +91,20 @@ class LimbCoverage:
                 "seen_bins": self.seen_bins}
 
 
-def limb_coverage(parsing: Parsing, polyline: np.ndarray, parts: list[str], cloth: tuple[int, ...]) -> LimbCoverage:
+def limb_coverage(parsing: Parsing, polyline: np.ndarray, parts: list[str], cloth: tuple[int, ...],
+                  reach: float | None = None, bare: tuple[int, ...] = (SKIN,)) -> LimbCoverage:
     """The ``cloth`` labels' coverage along ``polyline`` [3,2] (crop pixels) over the pixels of body
-    ``parts`` (module docstring)."""
+    ``parts`` within ``reach`` (default ``REACH``) of the polyline's length, against the ``bare``
+    labels (module docstring)."""
+    reach = REACH if reach is None else reach
     wanted = [PART_INDEX[p] for p in parts]
     rows, cols = np.nonzero(np.isin(parsing.parts, wanted))
     s, distance = _project(np.stack([cols + 0.5, rows + 0.5], 1), polyline)
-    near = distance <= REACH * (np.linalg.norm(polyline[1] - polyline[0]) + np.linalg.norm(polyline[2] - polyline[1]))
+    near = distance <= reach * (np.linalg.norm(polyline[1] - polyline[0]) + np.linalg.norm(polyline[2] - polyline[1]))
     rows, cols, s = rows[near], cols[near], s[near]
     labels = parsing.labels[rows, cols]
     covered = np.isin(labels, cloth)
-    counted = covered | (labels == SKIN)
+    counted = covered | np.isin(labels, bare)
     index = np.minimum((s * BINS).astype(int), BINS - 1)
     totals = np.bincount(index[counted], minlength=BINS)
     coverage = np.where(totals >= MIN_BIN, np.bincount(index[counted & covered], minlength=BINS) / np.maximum(totals, 1),
@@ -219,6 +226,25 @@ def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) ->
     return evidence, probabilities
 
 
+def torso_line(landmarks: np.ndarray) -> np.ndarray:
+    """[3,2] the body's middle line: between the shoulders, the hips and the knees (``landmarks`` [33,2])."""
+    from darts.photo.person import LANDMARKS
+
+    def middle(joint: str) -> np.ndarray:
+        return 0.5 * (landmarks[LANDMARKS.index(f"left_{joint}")] + landmarks[LANDMARKS.index(f"right_{joint}")])
+
+    return np.array([middle("shoulder"), middle("hip"), middle("knee")])
+
+
+def _top_hem(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) -> dict:
+    """Where a top ends down the body's middle line (``torso_line``: 0 between the shoulders, 0.5
+    between the hips, 1 between the knees), over the torso's, hips' and thighs' pixels within
+    ``TORSO_REACH`` of the line's length, against skin and the lower garment."""
+    torso = limb_coverage(parsing, torso_line(landmarks), ["upper_torso", "lower_torso", "hips", "left_thigh",
+                                                           "right_thigh"], cloth, TORSO_REACH, (SKIN, LOWER))
+    return {"top_hem_end": None if torso.end is None else round(torso.end, 3), "torso": torso.as_dict()}
+
+
 def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...],
            read_gap: bool = True) -> tuple[dict, float | None, float | None, float | None]:
     """(evidence, P(long), P(skirt), the fill between the legs) of the garment below the waist
@@ -290,7 +316,8 @@ def _separates(parsing: Parsing, points: np.ndarray, notes: list[str],
     if share[UPPER] >= MIN_GARMENT_SHARE:
         sleeves, p_sleeve = _sleeves(parsing, points, (UPPER,))
         names = {"long": "long-sleeve-top", "short": "short-sleeve-top", "none": "sleeveless-top"}
-        garments.append(GarmentGuess("upper", UPPER, _ranked({names[k]: p for k, p in p_sleeve.items()}), sleeves))
+        garments.append(GarmentGuess("upper", UPPER, _ranked({names[k]: p for k, p in p_sleeve.items()}),
+                                     {**sleeves, **_top_hem(parsing, points, (UPPER,))}))
     else:
         notes.append("no upper garment in the picture")
     return garments, notes

@@ -217,9 +217,16 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     template = make_dart(category, body, betas=None if not betas else np.asarray(betas), edge_length=edge_length)
     times["template_s"] = time.perf_counter() - mark
     mark = time.perf_counter()
+    length_report, length_targets = None, None
     if posed:  # the lines as the posed body shows them, taken back to its rest pose
         lines = regress_posed_lines(image, mask, body_fit.camera, body, body_fit.pose, betas, category,
                                     template_lines(template, category))
+        chosen = outfit.garment(kind) if outfit is not None and kind is not None else None
+        if chosen is not None:  # the lengths the photograph shows, where the garment ends along the body
+            from darts.photo.lengths import length_targets as targets_of, place_lines
+
+            length_targets = targets_of(category, chosen.attributes, body, betas)
+            lines, length_report = place_lines(lines, length_targets, template.vertices.mean(0))
     else:
         lines = regress_lines(image, camera, category)
     times["regress_s"] = time.perf_counter() - mark
@@ -233,6 +240,11 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
     mark = time.perf_counter()
     dart, crdl = deform_dart(template, body, lines, "local-global", weights, silhouette, progress=progress)
     times["crdl_s"] = time.perf_counter() - mark
+    if length_report:
+        from darts.photo.lengths import reached
+
+        final = dict(zip(CATEGORIES[category].line_names, template_lines(dart, category)))
+        length_report = reached(final, length_targets, length_report, template.vertices.mean(0))
     times["total_s"] = time.perf_counter() - started
     report = {"category": category, "probability": probability,
               "top_categories": [{"category": c, "probability": p} for c, p in ranked[:3]],
@@ -243,7 +255,7 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
               "given": {"category": not classified, "camera": given_camera, "mask": given_mask,
                         "betas": given_betas},
               "category_from": None if not classified else "photo parsing" if garment_ranked else "classifier",
-              "garment": kind, "outfit": None if outfit is None else outfit.as_dict(),
+              "garment": kind, "outfit": None if outfit is None else outfit.as_dict(), "lengths": length_report,
               "mask_estimated": mask is not None and not given_mask,
               "camera": camera.as_dict(), "silhouette": silhouette is not None,
               "lines": {name: points.round(5).tolist() for name, points in lines.items()},
