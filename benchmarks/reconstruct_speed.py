@@ -1,7 +1,12 @@
-"""`darts reconstruct`'s speed and quality by silhouette term and picture size, on held-out pictures.
+"""`darts reconstruct`'s speed and quality by silhouette term and picture size, on held-out pictures;
+or, with --photos, its end-to-end CPU time on photographs.
 
     python benchmarks/reconstruct_speed.py --data ~/.cache/darts/dataset-s7 [--split test] [--count 20]
         [--terms soft:1,outline:1] [--sizes 224,1024]
+    python benchmarks/reconstruct_speed.py --photos PHOTO [PHOTO ...]   # docs/data/benchmark_photo_speed.json
+
+With --photos, each photograph goes through ``darts reconstruct PHOTO -o OUT_DIR`` in a new process
+(start-up included), timed by that process's CPU (user + system).
 
 Each picture (image, garment mask, camera, body shape, ground-truth drape: ``darts dataset make``)
 is reconstructed end to end (classifier, regressor, template, CRDL with the silhouette term) by
@@ -36,9 +41,41 @@ def upscaled(image: np.ndarray, mask: np.ndarray, camera, size: int):
     return big, soft > 127, camera.resized(size, size)
 
 
+def photographs(paths: list[Path], out: Path) -> None:
+    """``darts reconstruct PHOTO -o OUT_DIR`` end to end on each photograph, as a user runs it (a new
+    process: start-up, imports and model loading included), timed by the child process's CPU
+    (user + system, ``resource.getrusage(RUSAGE_CHILDREN)``); writes ``out`` and prints a table."""
+    import resource
+    import subprocess
+    import sys
+    import tempfile
+
+    rows = []
+    for path in paths:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        with tempfile.TemporaryDirectory() as folder:
+            run = subprocess.run([sys.executable, "-m", "darts.cli.main", "reconstruct", str(path), "-o",
+                                  str(Path(folder) / "outfit")], capture_output=True, text=True)
+            report = json.loads((Path(folder) / "outfit" / "report.json").read_text()) if run.returncode == 0 else None
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        rows.append({"photo": path.name, "exit": run.returncode, "cpu_s": round(cpu, 2),
+                     "garments": [g["category"] for g in report["garments"]] if report else None,
+                     "vertices": [g["vertices"] for g in report["garments"]] if report else None})
+        print(json.dumps(rows[-1]), flush=True)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps({"command": "python benchmarks/reconstruct_speed.py --photos ...", "rows": rows}, indent=1))
+    print("| photograph | garments | vertices | CPU s |\n|---|---|---|---|")
+    for row in rows:
+        print(f"| {row['photo']} | {', '.join(row['garments'] or ['refused'])} | "
+              f"{', '.join(map(str, row['vertices'] or []))} | {row['cpu_s']:.1f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, required=True)
+    parser.add_argument("--photos", type=Path, nargs="+", metavar="PHOTO",
+                        help="instead: darts reconstruct PHOTO -o OUT_DIR end to end on each, CPU of the whole process")
+    parser.add_argument("--data", type=Path)
     parser.add_argument("--split", default="test")
     parser.add_argument("--count", type=int, default=20)
     parser.add_argument("--terms", default="soft:1,outline:1", help="NAME:WEIGHT, comma-separated")
@@ -46,6 +83,10 @@ def main() -> None:
     parser.add_argument("--soft-everywhere", action="store_true")
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "data" / "benchmark_reconstruct.json")
     args = parser.parse_args()
+    if args.photos:
+        return photographs(args.photos, ROOT / "docs" / "data" / "benchmark_photo_speed.json")
+    if args.data is None:
+        parser.error("--data or --photos is needed")
 
     import torch
 

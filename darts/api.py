@@ -194,12 +194,13 @@ def read_outfit(image, body=None):
 
 def reconstruct_outfit(image, body=None, garments: Sequence[str] | None = None, betas: Sequence[float] | None = None,
                        edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False, silhouette: str = "outline",
-                       silhouette_weight: float | None = None, accept_low_confidence: bool = False):
+                       silhouette_weight: float | None = None):
     """Every garment the person in the photograph ``image`` (a path or [H,W,3] uint8) wears, each a
     DART fitted through the pose to its own parsed mask on the body fitted once to the person
     (``garments``: only these kinds, of upper, lower, dress). Returns an ``OutfitReconstruction``:
     ``.outfit`` (what was read, ``read_outfit``), ``.garments`` (a ``Reconstruction`` each, inner
-    layer first) and ``.save(folder)`` (the outfit folder ``darts-sim`` runs). A picture that is too
+    layer first; one whose category is unsure, under 50 %, takes the most likely and its report
+    says ``low_confidence``) and ``.save(folder)`` (the outfit folder ``darts-sim`` runs). A picture that is too
     small, blurred or blank, without a person or without such a garment raises ``DartsInputError``."""
     from darts.crdl import check_silhouette
     from darts.photo.outfit import KINDS
@@ -217,8 +218,7 @@ def reconstruct_outfit(image, body=None, garments: Sequence[str] | None = None, 
         raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
     try:
         return run(picture, model, list(garments) if garments else None, betas=betas, edge_length=edge_length,
-                   progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight,
-                   accept_low_confidence=accept_low_confidence)
+                   progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight)
     except DartsInputError as error:
         if error.source is None and isinstance(image, (str, os.PathLike)):
             raise DartsInputError(image, error.problem.removeprefix("the picture ")) from None

@@ -20,8 +20,7 @@ def shipped_garments() -> list[str]:
 
 def garment_help() -> str:
     """What a GARMENT argument takes, for a command's --help."""
-    return (f"a garment.npz (a DART), an outfit folder (darts reconstruct PHOTO -o OUT_DIR: its garments in layer "
-            f"order) or a shipped garment: {', '.join(shipped_garments())}")
+    return f"a garment.npz (a DART) or a shipped garment: {', '.join(shipped_garments())}"
 
 
 def motion_help() -> str:

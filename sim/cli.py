@@ -43,7 +43,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"darts-sim {__version__}")
     p.add_argument("garment", metavar="GARMENT", nargs="+",
                    help=garment_help() + "; several make an outfit, inner layer first (a top tucked into trousers "
-                        "before them, a top worn over them after)")
+                        "before them, a top worn over them after); an outfit folder (darts reconstruct PHOTO -o "
+                        "OUT_DIR) stands for its garments in its layer order")
     p.add_argument("motion", metavar="MOTION", help=motion_help())
     p.add_argument("-o", "--output", metavar="OUT", required=True,
                    help="OUT.usd/.usda/.usdc, or a directory for an OBJ/PLY sequence (see --format)")

@@ -277,3 +277,22 @@ def test_the_garment_network_learns_a_handful_of_masks_and_categories():
     found = mask_logits[:, 0] > 0
     assert float(((found & masks).sum((1, 2)) / (found | masks).sum((1, 2))).min()) > 0.8
     assert torch.equal(category_logits.argmax(1), labels)
+
+
+def test_the_body_fits_adam_is_torchs():
+    """darts.photo.fit.Adam (written out to spare torch's optimiser's import) takes the same steps as
+    torch.optim.Adam, to the bit, over 300 steps of a non-convex loss."""
+    import torch
+
+    from darts.photo.fit import Adam
+
+    torch.manual_seed(0)
+    ours = torch.randn(5, dtype=torch.float64, requires_grad=True)
+    theirs = ours.detach().clone().requires_grad_(True)
+    steppers = [(ours, Adam([ours], lr=0.02)), (theirs, torch.optim.Adam([theirs], lr=0.02))]
+    for _ in range(300):
+        for x, optimiser in steppers:
+            x.grad = None
+            (((x - torch.arange(5.0, dtype=torch.float64)) ** 4).sum() + x.sin().sum()).backward()
+            optimiser.step()
+    assert torch.equal(ours, theirs)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -14,7 +15,21 @@ from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH
 SIM_SUFFIXES = (".usd", ".usda", ".usdc")
 
 
+#: environment variables this command set itself (and so does not pass on to darts-sim)
+_DEFAULTED: list[str] = []
+
+
+def _small_tensor_threads() -> None:
+    """One OpenMP thread for torch unless the user chose (set before torch is first imported): a
+    photograph's tensors are small, and a second thread's spinning cost 13.5 s of CPU against 8.1 s
+    for a photograph of two garments (``darts.threads``)."""
+    if "OMP_NUM_THREADS" not in os.environ:
+        os.environ["OMP_NUM_THREADS"] = "1"
+        _DEFAULTED.append("OMP_NUM_THREADS")
+
+
 def classify(args) -> int:
+    _small_tensor_threads()
     from darts import api
 
     if args.mask is None:  # a photograph: every garment the person wears
@@ -39,6 +54,7 @@ def classify(args) -> int:
 
 
 def reconstruct(args) -> int:
+    _small_tensor_threads()
     from darts import api
 
     if (args.simulate is None) != (args.sim_out is None):
@@ -85,17 +101,18 @@ def reconstruct_outfit(args) -> int:
         check_output(args.sim_out, SIM_SUFFIXES)
     result = api.reconstruct_outfit(args.image, args.body, [args.garment] if args.garment else None, args.betas,
                                     args.edge_length, progress=True, silhouette=args.silhouette,
-                                    silhouette_weight=args.silhouette_weight,
-                                    accept_low_confidence=args.accept_low_confidence)
+                                    silhouette_weight=args.silhouette_weight)
     result.save(args.output, source=str(args.image))
     if args.report:
         with atomic_path(args.report) as tmp:
             tmp.write_text(json.dumps(result.report(), indent=1))
     for name, garment in zip(result.file_names(), result.garments):
         report = garment.report
+        unsure = ", ".join(f"{c['category']} {100 * c['probability']:.0f} %" for c in report["top_categories"])
         print(f"{report['garment']}: {report['category']} ({100 * report['probability']:.1f} %): wrote "
               f"{args.output}/{name}, {report['vertices']} vertices, lines fitted to "
-              f"{1e3 * report['crdl']['handle_rmse']:.2f} mm, {100 * report['crdl']['penetration']:.2f} % inside the body")
+              f"{1e3 * report['crdl']['handle_rmse']:.2f} mm, {100 * report['crdl']['penetration']:.2f} % inside the body"
+              + (f" (category unsure: {unsure})" if report["low_confidence"] else ""))
     for note in result.outfit.notes:
         print(f"note: {note}")
     print(f"outfit of {len(result.garments)}, inner layer first: darts-sim {args.output} MOTION")
@@ -109,7 +126,8 @@ def _simulate(args) -> int:
     command = [sys.executable, "-m", "sim.cli", str(args.output), args.simulate, "-o", args.sim_out]
     if args.body:
         command += ["--body", args.body]
-    return subprocess.run(command).returncode
+    environment = {k: v for k, v in os.environ.items() if k not in _DEFAULTED}
+    return subprocess.run(command, env=environment).returncode
 
 
 def add_silhouette_options(parser) -> None:

@@ -29,6 +29,7 @@ Positions are in whatever frame the caller uses (the templates: canonical, Y up,
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,7 +105,16 @@ class _EditableMesh:
         return sorted({_key(f[k], f[(k + 1) % 3]) for i, f in enumerate(self.faces) if self.alive[i] for k in range(3)})
 
     def length(self, a: int, b: int) -> float:
-        return float(np.linalg.norm(self.x[a] - self.x[b]))
+        d = self.x[a] - self.x[b]
+        return math.sqrt(d @ d)
+
+    def short_edges(self, min_length: float) -> list[tuple[float, int, int]]:
+        """(length, a, b) of every edge shorter than ``min_length``, shortest first."""
+        edges = np.array(self.edges(), np.int64).reshape(-1, 2)
+        points = np.asarray(self.x)
+        d = points[edges[:, 0]] - points[edges[:, 1]]
+        lengths = np.sqrt(np.einsum("ij,ij->i", d, d))
+        return sorted((float(lengths[k]), int(edges[k, 0]), int(edges[k, 1])) for k in np.flatnonzero(lengths < min_length))
 
     def is_curve_edge(self, a: int, b: int) -> bool:
         return bool(self.curves_on(a, b))
@@ -259,8 +269,7 @@ class _EditableMesh:
 
 def _collapse_short_edges(mesh: _EditableMesh, min_length: float, report: SliverReport) -> None:
     while True:
-        short = [(mesh.length(a, b), a, b) for a, b in mesh.edges()]
-        short = sorted(s for s in short if s[0] < min_length)
+        short = mesh.short_edges(min_length)
         touched: set[int] = set()
         done = 0
         for _, a, b in short:
@@ -423,7 +432,7 @@ def _flip_to_delaunay(mesh: _EditableMesh, vertices: set[int]) -> int:
 
 def _problems(mesh: _EditableMesh, min_length: float) -> tuple[list[tuple[int, int]], set[tuple[int, int]]]:
     """Edges shorter than ``min_length`` and single-face sectors."""
-    short = [(a, b) for a, b in mesh.edges() if mesh.length(a, b) < min_length]
+    short = [(a, b) for _, a, b in mesh.short_edges(min_length)]
     return short, _lone_sectors(mesh, range(len(mesh.x)))
 
 

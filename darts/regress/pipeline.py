@@ -125,7 +125,15 @@ class Reconstruction:
     mask: np.ndarray | None = None  # [H,W] bool: the garment mask the silhouette term used (given or estimated)
 
 
-def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
+def reconstruct(*args, **kwargs) -> Reconstruction:
+    """``_reconstruct`` on one torch thread (``darts.threads.one_torch_thread``)."""
+    from darts.threads import one_torch_thread
+
+    with one_torch_thread():
+        return _reconstruct(*args, **kwargs)
+
+
+def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: Camera | None = None,
                 mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH,
                 progress: bool = False, silhouette_term: str = "outline",
                 silhouette_weight: float | None = None, accept_low_confidence: bool = False,
@@ -200,6 +208,10 @@ def reconstruct(image: np.ndarray, body, category: str | None = None, camera: Ca
             times["classify_s"] = time.perf_counter() - mark
         problem = confidence_problem(ranked)
         if problem and not accept_low_confidence:
+            if garment_ranked is not None:  # the parsing saw the garment; its category is what is unsure
+                others = ", ".join(f"{c} {100 * p:.0f} %" for c, p in ranked[:3])
+                problem = (f"shows a{'n' if kind == 'upper' else ''} {kind} garment whose category is unsure ({others}; at "
+                           "least 50 % needed); give --category, or --accept-low-confidence to go on")
             raise DartsInputError(None, f"the picture {problem}")
         low_confidence = low_confidence or problem is not None
     else:
@@ -319,5 +331,8 @@ def reconstruct_outfit(image: np.ndarray, body, kinds: list[str] | None = None, 
         said = ", ".join(f"{g.kind} ({g.category})" for g in photograph.outfit.garments) if seen else "none"
         raise DartsInputError(None, f"the picture shows a person but no {' or '.join(kinds or [''])} garment "
                                     f"(garments seen: {said})".replace("no  garment", "no garment"))
+    # Every garment seen is reconstructed: one whose category is unsure (under 50 %) takes its most
+    # likely one, and its report says low_confidence.
+    options = {**options, "accept_low_confidence": True}
     return OutfitReconstruction(photograph.outfit,
                                 [reconstruct(image, body, garment=kind, photograph=photograph, **options) for kind in wanted])
