@@ -244,3 +244,17 @@ def test_an_outfit_folder_takes_no_mask_camera_or_category(run_darts, tmp_path):
     code, stdout, err = run_darts("reconstruct", PORTRAIT, "-o", tmp_path / "outfit", "--category", "long-sleeve-top")
     assert code == 2 and len(err.strip().splitlines()) == 1 and "give -o garment.npz" in err, err
     assert not (tmp_path / "outfit").exists()
+
+
+@pytest.mark.parametrize("picture", ["noise", "tiny", "blank"])
+def test_an_outfit_from_a_bad_photograph_is_one_line_exit_2_and_no_folder(run_darts, tmp_path, picture):
+    path = tmp_path / "photo.png"
+    size = 1 if picture == "tiny" else 224
+    pixels = (np.random.default_rng(1).integers(0, 256, (size, size, 3)) if picture == "noise"
+              else np.full((size, size, 3), 200))
+    Image.fromarray(pixels.astype(np.uint8)).save(path)
+    code, out, err = run_darts("reconstruct", path, "-o", tmp_path / "outfit")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    expected = {"tiny": "too small", "blank": "too blurred or blank"}.get(picture, "shows no person")
+    assert "photo.png: " in err and expected in err, err
+    assert not (tmp_path / "outfit").exists()

@@ -51,6 +51,8 @@ REACH = 0.12
 TORSO_REACH = 0.15
 #: the least gap between the legs (crop pixels, of 256) that says anything of what fills it
 MIN_GAP_PIXELS = 25
+#: P(none / short / long) of sleeves no arm shows
+SLEEVE_PRIOR = {"none": 0.15, "short": 0.4, "long": 0.45}
 #: the share of cloth in the gap between the legs at which a skirt and trousers are as likely, and
 #: the hem (s) above which there is a gap to read
 SKIRT_FILL, MIN_GAP_HEM = 0.65, 0.45
@@ -92,10 +94,11 @@ class LimbCoverage:
 
 
 def limb_coverage(parsing: Parsing, polyline: np.ndarray, parts: list[str], cloth: tuple[int, ...],
-                  reach: float | None = None, bare: tuple[int, ...] = (SKIN,)) -> LimbCoverage:
+                  reach: float | None = None, bare: tuple[int, ...] = (SKIN,), last: bool = False) -> LimbCoverage:
     """The ``cloth`` labels' coverage along ``polyline`` [3,2] (crop pixels) over the pixels of body
     ``parts`` within ``reach`` (default ``REACH``) of the polyline's length, against the ``bare``
-    labels (module docstring)."""
+    labels (module docstring). With ``last`` the end is after the last covered bin instead of at
+    the first bare one (a top open over a shirt is bare in the middle, not at its end)."""
     reach = REACH if reach is None else reach
     wanted = [PART_INDEX[p] for p in parts]
     rows, cols = np.nonzero(np.isin(parsing.parts, wanted))
@@ -115,7 +118,14 @@ def limb_coverage(parsing: Parsing, polyline: np.ndarray, parts: list[str], clot
     if seen[0] > 2 and coverage[seen[0]] < 0.5:  # bare where it comes into view: its end is hidden
         return LimbCoverage(coverage, None, False, len(seen))
     end = None
-    for k in seen:
+    if last:
+        covered_bins = [k for k in seen if coverage[k] >= 0.5]
+        if not covered_bins:
+            end = 0.0
+        elif covered_bins[-1] < seen[-1]:  # the bin after the last covered one is in view
+            k = covered_bins[-1] + 1
+            end = (k - 1 + coverage[k - 1] + (0.0 if np.isnan(coverage[k]) else coverage[k])) / BINS
+    for k in [] if last else seen:
         if coverage[k] < 0.5 and (k + 1 >= BINS or np.isnan(coverage[k + 1]) or coverage[k + 1] < 0.5):
             # between bins: the last covered bin's bare share back, the first bare bin's cloth on
             before = coverage[k - 1] if k > 0 and not np.isnan(coverage[k - 1]) else 1.0
@@ -213,11 +223,15 @@ def _ranked(probabilities: dict[str, float]) -> list[tuple[str, float]]:
 
 
 def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) -> tuple[dict, dict[str, float]]:
+    """(evidence, P(none / short / long)) of the sleeves of the garment labelled ``cloth``; with no
+    arm read the sleeves take ``SLEEVE_PRIOR``. (Leaving out arms whose elbow BlazePose does not
+    see was measured and dropped: 69.2 % of the posed renders' categories with it, 70.0 % without,
+    no photograph changed.)"""
     arms = {side: limb_coverage(parsing, _limb(landmarks, side, ARM), [f"{side}_upper_arm", f"{side}_forearm",
                                                                        f"{side}_hand"], cloth)
             for side in ("left", "right")}
     end, beyond = _garment_end(list(arms.values()))
-    probabilities = _sleeve_probabilities(end) if end is not None else {"none": 1 / 3, "short": 1 / 3, "long": 1 / 3}
+    probabilities = _sleeve_probabilities(end) if end is not None else dict(SLEEVE_PRIOR)
     if beyond and end >= 0.3 and probabilities["long"] < 0.6:  # covered out of the picture: at least this long
         probabilities = {"none": 0.0, "short": 0.4, "long": 0.6}
     evidence = {"sleeve_end": None if end is None else round(end, 3), "sleeve_beyond_picture": beyond,
@@ -239,9 +253,10 @@ def torso_line(landmarks: np.ndarray) -> np.ndarray:
 def _top_hem(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) -> dict:
     """Where a top ends down the body's middle line (``torso_line``: 0 between the shoulders, 0.5
     between the hips, 1 between the knees), over the torso's, hips' and thighs' pixels within
-    ``TORSO_REACH`` of the line's length, against skin and the lower garment."""
+    ``TORSO_REACH`` of the line's length, against skin and the lower garment: after its last
+    covered bin (an open jacket shows a shirt in the middle)."""
     torso = limb_coverage(parsing, torso_line(landmarks), ["upper_torso", "lower_torso", "hips", "left_thigh",
-                                                           "right_thigh"], cloth, TORSO_REACH, (SKIN, LOWER))
+                                                           "right_thigh"], cloth, TORSO_REACH, (SKIN, LOWER), last=True)
     return {"top_hem_end": None if torso.end is None else round(torso.end, 3), "torso": torso.as_dict()}
 
 
@@ -286,14 +301,17 @@ def garments_seen(parsing: Parsing, landmarks: np.ndarray,
     return _separates(parsing, points, notes, visibility)
 
 
-def _knees_seen(visibility: np.ndarray | None) -> bool:
-    """Whether BlazePose sees both knees (visibility at least one half; without visibilities, yes):
-    else the legs' landmarks are guessed (out of frame, hidden) and no gap between them is read."""
+def _seen(visibility: np.ndarray | None, landmark: str) -> bool:
+    """Whether BlazePose sees ``landmark`` (visibility at least one half; without visibilities, yes):
+    else it is guessed (out of frame, hidden)."""
     from darts.photo.person import LANDMARKS
 
-    if visibility is None:
-        return True
-    return min(visibility[LANDMARKS.index("left_knee")], visibility[LANDMARKS.index("right_knee")]) >= 0.5
+    return visibility is None or visibility[LANDMARKS.index(landmark)] >= 0.5
+
+
+def _knees_seen(visibility: np.ndarray | None) -> bool:
+    """Whether both knees are seen: else no gap between the legs is read."""
+    return _seen(visibility, "left_knee") and _seen(visibility, "right_knee")
 
 
 def _separates(parsing: Parsing, points: np.ndarray, notes: list[str],

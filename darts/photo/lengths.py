@@ -73,7 +73,8 @@ def length_targets(category: str, attributes: dict, body, betas) -> dict[str, di
     if top is not None and "hem" in names and "hem" not in targets:
         middle = np.array([0.5 * (a + b) for a, b in zip(_chain(points, "left", ("shoulder", "hip", "knee")),
                                                           _chain(points, "right", ("shoulder", "hip", "knee")))])
-        targets["hem"] = {"point": point_at(middle, top), "s": top, "beyond_picture": False}
+        targets["hem"] = {"point": point_at(middle, top), "s": top,
+                          "beyond_picture": bool(attributes.get("torso", {}).get("beyond_picture"))}
     return targets
 
 

@@ -224,17 +224,19 @@ def parse_person(image: np.ndarray, person_mask: np.ndarray, landmarks: np.ndarr
     skin_density = skin.log_density(flat).reshape(person.shape) if skin else np.full(person.shape, -np.inf)
     if skin is not None:
         own = skin.log_density(colours[skin_source])
-        # skin as the cloth models must not learn it: the skin model's own range, and skin-coloured
-        # pixels somewhat off it (a leg lit otherwise than the face)
-        skin_like = (skin_density > np.quantile(own, 0.05)) | (skin_coloured(colours) & (skin_density > own.min() - 8.0))
+        # skin as the cloth models must not learn it: the skin model's own range; on the legs also
+        # skin-coloured pixels somewhat off it (bare legs lit otherwise than the face; on the torso
+        # such a colour is far more often cloth: a peach suit, a beige shirt)
+        skin_like = skin_density > np.quantile(own, 0.05)
+        leg_skin_like = skin_like | (skin_coloured(colours) & (skin_density > own.min() - 8.0))
     else:
-        skin_like = np.zeros(person.shape, bool)
+        skin_like = leg_skin_like = np.zeros(person.shape, bool)
     upper, upper_samples = _cloth_model(colours, _erode(_zone_mask(parts, "upper_torso", "lower_torso", "upper_arm"), 2),
                                         skin_like)
     lower_region = _erode(_zone_mask(parts, "thigh"), 2)
-    if (lower_region & ~skin_like).sum() < 40:
+    if (lower_region & ~leg_skin_like).sum() < 40:
         lower_region = _erode(_zone_mask(parts, "thigh", "calf"), 2)
-    lower, lower_samples = _cloth_model(colours, lower_region, skin_like)
+    lower, lower_samples = _cloth_model(colours, lower_region, leg_skin_like)
 
     hair = ColourModel.fit(colours[_erode(_zone_mask(parts, "head"), 1) & ~skin_like & ~face], components=2)
     uniform = np.full(person.shape, OTHER_LOG_DENSITY)
