@@ -21,7 +21,8 @@ Measures per picture (256 x 256 pixels):
   around the found person) against the true garment mask (IoU), and its category.
 With ``--reconstruct`` (on every ``--every``-th picture), ``darts.regress.pipeline.reconstruct``
 twice with no camera: "oracle", given the true category and the garment's true mask, and "photo",
-given nothing but the picture (the garment network's mask and category). Each against the
+given nothing but the picture: the parsing's garment of the picture's kind (upper, lower, dress:
+the one of ``-o OUT_DIR``'s garments that the truth is about), its mask, category and lengths. Each against the
 template of its category on the same fitted body without the CRDL:
 - **garment IoU**: the garment posed by the fitted body (``darts.crdl.posed.Posing``) and rendered through the
   fitted camera, the fitted body in front of it, against the true mask;
@@ -42,9 +43,11 @@ import numpy as np
 
 
 def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.ndarray, category: str | None,
-                     folder: Path, body) -> dict:
-    """The posed path's garment (given ``mask`` and ``category``, or None: estimated) against the
-    template on the same fitted body, both measured against ``truth_mask`` (module docstring)."""
+                     folder: Path, body, garment: str | None = None) -> dict:
+    """The posed path's garment (given ``mask`` and ``category``, or None: estimated; ``garment``:
+    which of the photograph's garments, as ``-o OUT_DIR`` reconstructs each, an unsure category
+    taking its most likely) against the template on the same fitted body, both measured against
+    ``truth_mask`` (module docstring)."""
     import torch
 
     from darts.camera import Camera
@@ -61,7 +64,8 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
 
     start = time.process_time()
     try:
-        result = reconstruct(image, body, category, None, mask, edge_length=DATASET_EDGE_LENGTH)
+        result = reconstruct(image, body, category, None, mask, edge_length=DATASET_EDGE_LENGTH, garment=garment,
+                             accept_low_confidence=garment is not None)
     except DartsInputError as error:
         return {"reconstruct_s": time.process_time() - start, "posed": False, "refused": error.problem}
     seconds = time.process_time() - start
@@ -186,9 +190,8 @@ def main() -> None:
             if args.reconstruct:
                 oracle = garment_measures(image, garment_mask, garment_mask, meta["category"], folder, body)
                 row.update({f"oracle_{k}": v for k, v in oracle.items()})
-                if network:
-                    photo = garment_measures(image, None, garment_mask, None, folder, body)
-                    row.update({f"photo_{k}": v for k, v in photo.items()})
+                photo = garment_measures(image, None, garment_mask, None, folder, body, KIND_OF[meta["category"]])
+                row.update({f"photo_{k}": v for k, v in photo.items()})
         rows.append(row)
         print(json.dumps(row), flush=True)
     found = [r for r in rows if r["found"]]

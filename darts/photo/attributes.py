@@ -24,9 +24,11 @@ two limbs the shorter end counts (``_garment_end``).
 - **Skirt or pants**: the gap between the legs down to the hem — inside the polygon of the two
   legs' polylines, off the fitted body's silhouette (below its crotch) — and the share of it that
   is the garment's cloth against background (a skirt fills the gap, trousers leave it open; skin
-  there is a leg the fit put elsewhere); P(skirt) = sigma((fill - 0.65) / 0.06); ``SKIRT_PRIOR``
-  when no gap shows (legs together, crossed or seen from the side, or a hem above s = 0.45, where
-  the legs part). One cloth from the shoulders down is a dress unless the gap is clearly open
+  there is a leg the fit put elsewhere); P(skirt) = sigma((fill - 0.65) / 0.06). Where no gap
+  shows (legs together, crossed or seen from the side, knees not seen) but the garment is long
+  (hem past s = 0.45), how far it hangs off the legs: the share of its leg pixels off the fitted
+  body's silhouette, P(skirt) = sigma((off - 0.33) / 0.06) (``off_the_legs``); a hem above
+  s = 0.45, where the legs part, gives neither: ``SKIRT_PRIOR``. One cloth from the shoulders down is a dress unless the gap is clearly open
   (fill under 0.35): then a suit, a top and trousers.
 """
 from __future__ import annotations
@@ -58,6 +60,9 @@ SLEEVE_PRIOR = {"none": 0.15, "short": 0.4, "long": 0.45}
 SKIRT_FILL, MIN_GAP_HEM = 0.65, 0.45
 #: one cloth from the shoulders down is taken for a suit (a top and trousers) only under this fill
 SUIT_FILL = 0.35
+#: with no gap to read, the share of a long garment's leg pixels off the fitted legs at which a
+#: skirt and trousers are as likely
+SKIRT_OFF_BODY = 0.33
 #: P(skirt) when no gap between the legs shows
 SKIRT_PRIOR = 0.35
 ARM = ("shoulder", "elbow", "wrist")
@@ -272,11 +277,32 @@ def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...],
     p_long = None if end is None else float(expit((end - 0.55) / 0.05))
     if beyond and p_long is not None and p_long < 0.6:
         p_long = 0.6  # the hem is out of the picture: at least this long, more likely long than short
-    p_skirt = None if fill is None else float(expit((fill - SKIRT_FILL) / 0.06))
+    off_body = off_the_legs(parsing, cloth)
+    if fill is not None:
+        p_skirt = float(expit((fill - SKIRT_FILL) / 0.06))
+    elif off_body is not None and end is not None and end >= MIN_GAP_HEM:
+        p_skirt = float(expit((off_body - SKIRT_OFF_BODY) / 0.06))
+    else:
+        p_skirt = None
     evidence = {"hem_end": None if end is None else round(end, 3), "hem_beyond_picture": beyond,
                 "between_legs_fill": None if fill is None else round(fill, 3),
+                "off_the_legs": None if off_body is None else round(off_body, 3),
                 "legs": {k: v.as_dict() for k, v in legs.items()}}
     return evidence, p_long, p_skirt, fill
+
+
+def off_the_legs(parsing: Parsing, cloth: tuple[int, ...]) -> float | None:
+    """The share of the ``cloth`` pixels nearest the thighs and calves that lie off the fitted body's
+    silhouette (grown by 2 pixels): a skirt hangs away from the legs, trousers follow them. None
+    with under ``MIN_GAP_PIXELS`` such pixels."""
+    from scipy import ndimage
+
+    on_legs = np.isin(parsing.parts, [PART_INDEX[f"{side}_{part}"] for side in ("left", "right")
+                                      for part in ("thigh", "calf")]) & np.isin(parsing.labels, cloth)
+    if on_legs.sum() < MIN_GAP_PIXELS:
+        return None
+    body = ndimage.binary_dilation(parsing.body_parts >= 0, iterations=2)
+    return float((on_legs & ~body).sum() / on_legs.sum())
 
 
 def garments_seen(parsing: Parsing, landmarks: np.ndarray,
