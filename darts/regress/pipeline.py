@@ -74,20 +74,22 @@ def regress_lines(image: np.ndarray, camera: Camera, category: str, variant: str
     return {name: out[k] for k, name in enumerate(CATEGORIES[category].line_names)}
 
 
-def _person(image: np.ndarray, body, times: dict):
+def _person(image: np.ndarray, body, times: dict, done=lambda: None):
     """(the person in ``image``, the body fitted to it), or (None, None) when there is none; the
-    stages' times go into ``times``."""
+    stages' times go into ``times``, ``done()`` is called after each."""
     from darts.photo.fit import fit_body
     from darts.photo.person import find_person
 
     mark = time.perf_counter()
     person = find_person(image)
     times["person_s"] = time.perf_counter() - mark
+    done()
     if person is None:
         return None, None
     mark = time.perf_counter()
     fit = fit_body(person, body, image.shape[1], image.shape[0])
     times["body_fit_s"] = time.perf_counter() - mark
+    done()
     return person, fit
 
 
@@ -103,18 +105,22 @@ class Photograph:
     times: dict
 
 
-def read_photograph(image: np.ndarray, body, parse: bool = True) -> Photograph:
+def read_photograph(image: np.ndarray, body, parse: bool = True, progress: bool = False) -> Photograph:
     """The person in ``image`` [H,W,3] uint8, ``body`` (a ``BodyModel``) fitted to them and, with
-    ``parse``, every garment they wear."""
-    times: dict = {}
-    person, body_fit = _person(image, body, times)
-    outfit = None
-    if person is not None and parse:
-        from darts.photo.outfit import read_outfit
+    ``parse``, every garment they wear; ``progress`` shows the stages (person, body fit, parsing)."""
+    from tqdm import tqdm
 
-        mark = time.perf_counter()
-        outfit = read_outfit(image, person, body_fit, body)
-        times["parsing_s"] = time.perf_counter() - mark
+    times: dict = {}
+    with tqdm(total=3 if parse else 2, desc="photograph", unit="stage", disable=not progress, leave=False) as bar:
+        person, body_fit = _person(image, body, times, bar.update)
+        outfit = None
+        if person is not None and parse:
+            from darts.photo.outfit import read_outfit
+
+            mark = time.perf_counter()
+            outfit = read_outfit(image, person, body_fit, body)
+            times["parsing_s"] = time.perf_counter() - mark
+            bar.update()
     return Photograph(person, body_fit, outfit, times)
 
 
@@ -173,7 +179,7 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
     started = time.perf_counter()
     classified, looked = category is None, camera is None
     if looked and photograph is None:
-        photograph = read_photograph(image, body, parse=mask is None)
+        photograph = read_photograph(image, body, parse=mask is None, progress=progress)
     person, body_fit, outfit = (photograph.person, photograph.body_fit, photograph.outfit) if looked else (None, None, None)
     times = dict(photograph.times) if looked else {}
     if looked and person is None and mask is None and not accept_low_confidence:
@@ -322,7 +328,7 @@ def reconstruct_outfit(image: np.ndarray, body, kinds: list[str] | None = None, 
     problem = picture_problem(image, None)
     if problem:
         raise DartsInputError(None, f"the picture {problem}")
-    photograph = read_photograph(image, body)
+    photograph = read_photograph(image, body, progress=options.get("progress", False))
     if photograph.person is None:
         raise DartsInputError(None, f"the picture {person_problem(given_alone='give --mask for a picture of a garment alone')}")
     seen = [g.kind for g in photograph.outfit.garments] if photograph.outfit else []
