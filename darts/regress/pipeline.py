@@ -74,25 +74,6 @@ def regress_lines(image: np.ndarray, camera: Camera, category: str, variant: str
     return {name: out[k] for k, name in enumerate(CATEGORIES[category].line_names)}
 
 
-def _person(image: np.ndarray, body, times: dict, done=lambda: None):
-    """(the person in ``image``, the body fitted to it), or (None, None) when there is none; the
-    stages' times go into ``times``, ``done()`` is called after each."""
-    from darts.photo.fit import fit_body
-    from darts.photo.person import find_person
-
-    mark = time.perf_counter()
-    person = find_person(image)
-    times["person_s"] = time.perf_counter() - mark
-    done()
-    if person is None:
-        return None, None
-    mark = time.perf_counter()
-    fit = fit_body(person, body, image.shape[1], image.shape[0])
-    times["body_fit_s"] = time.perf_counter() - mark
-    done()
-    return person, fit
-
-
 @dataclass
 class Photograph:
     """What a photograph given alone shows: its ``person`` (None: none found), the ``body_fit`` to
@@ -107,14 +88,26 @@ class Photograph:
 
 def read_photograph(image: np.ndarray, body, parse: bool = True, progress: bool = False) -> Photograph:
     """The person in ``image`` [H,W,3] uint8, ``body`` (a ``BodyModel``) fitted to them and, with
-    ``parse``, every garment they wear; ``progress`` shows the stages (person, body fit, parsing)."""
+    ``parse``, every garment they wear; ``progress`` shows the stages after a person is found (the
+    body fit, the parsing)."""
     from tqdm import tqdm
 
+    from darts.photo.fit import fit_body
+    from darts.photo.person import find_person
+
     times: dict = {}
-    with tqdm(total=3 if parse else 2, desc="photograph", unit="stage", disable=not progress, leave=False) as bar:
-        person, body_fit = _person(image, body, times, bar.update)
+    mark = time.perf_counter()
+    person = find_person(image)
+    times["person_s"] = time.perf_counter() - mark
+    if person is None:
+        return Photograph(None, None, None, times)
+    with tqdm(total=2 if parse else 1, desc="photograph", unit="stage", disable=not progress, leave=False) as bar:
+        mark = time.perf_counter()
+        body_fit = fit_body(person, body, image.shape[1], image.shape[0])
+        times["body_fit_s"] = time.perf_counter() - mark
+        bar.update()
         outfit = None
-        if person is not None and parse:
+        if parse:
             from darts.photo.outfit import read_outfit
 
             mark = time.perf_counter()
