@@ -194,7 +194,7 @@ def read_outfit(image, body=None):
 
 def reconstruct_outfit(image, body=None, garments: Sequence[str] | None = None, betas: Sequence[float] | None = None,
                        edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False, silhouette: str = "outline",
-                       silhouette_weight: float | None = None):
+                       silhouette_weight: float | None = None, lengths: bool = False):
     """Every garment the person in the photograph ``image`` (a path or [H,W,3] uint8) wears, each a
     DART fitted through the pose to its own parsed mask on the body fitted once to the person
     (``garments``: only these kinds, of upper, lower, dress). Returns an ``OutfitReconstruction``:
@@ -218,7 +218,8 @@ def reconstruct_outfit(image, body=None, garments: Sequence[str] | None = None, 
         raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
     try:
         return run(picture, model, list(garments) if garments else None, betas=betas, edge_length=edge_length,
-                   progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight)
+                   progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight,
+                   lengths=lengths)
     except DartsInputError as error:
         if error.source is None and isinstance(image, (str, os.PathLike)):
             raise DartsInputError(image, error.problem.removeprefix("the picture ")) from None
@@ -247,7 +248,7 @@ def _picture_mask(mask, picture: np.ndarray):
 def reconstruct(image, category: str | None = None, camera=None, mask=None, body=None,
                 betas: Sequence[float] | None = None, edge_length: float = DATASET_EDGE_LENGTH, progress: bool = False,
                 silhouette: str = "outline", silhouette_weight: float | None = None, accept_low_confidence: bool = False,
-                garment: str | None = None):
+                garment: str | None = None, lengths: bool = False):
     """The DART of the garment in ``image`` (a path or [H,W,3] uint8): classifier (unless
     ``category``), feature-line regressor, CRDL (with the silhouette term ``silhouette``, at
     ``silhouette_weight`` (default: the term's, ``darts.crdl.SILHOUETTE_WEIGHTS``), when ``mask`` is given).
@@ -258,7 +259,8 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``). A
     photograph given alone is parsed into every garment it shows (``darts.photo.outfit``): ``garment``
     (upper, lower or dress) picks the one reconstructed (default: the outer one); the report's
-    ``outfit`` lists them all."""
+    ``outfit`` lists them all and its ``lengths`` what the photograph shows of the garment's
+    lengths; ``lengths`` moves the lines there before the CRDL (``darts.regress.pipeline``)."""
     from darts.camera import Camera
     from darts.crdl import check_silhouette
     from darts.regress.pipeline import reconstruct as run
@@ -290,7 +292,7 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     try:
         return run(picture, model, category, camera, _picture_mask(mask, picture), betas=betas, edge_length=edge_length,
                    progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight,
-                   accept_low_confidence=accept_low_confidence, garment=garment)
+                   accept_low_confidence=accept_low_confidence, garment=garment, lengths=lengths)
     except DartsInputError as error:
         if error.source is None and isinstance(image, (str, os.PathLike)):
             raise DartsInputError(image, error.problem.removeprefix("the picture ")) from None

@@ -22,7 +22,7 @@ Measures per picture (256 x 256 pixels):
 With ``--reconstruct`` (on every ``--every``-th picture), ``darts.regress.pipeline.reconstruct``
 twice with no camera: "oracle", given the true category and the garment's true mask, and "photo",
 given nothing but the picture: the parsing's garment of the picture's kind (upper, lower, dress:
-the one of ``-o OUT_DIR``'s garments that the truth is about), its mask, category and lengths. Each against the
+the one of ``-o OUT_DIR``'s garments that the truth is about), its mask and category (its lengths measured, not applied: the default). Each against the
 template of its category on the same fitted body without the CRDL:
 - **garment IoU**: the garment posed by the fitted body (``darts.crdl.posed.Posing``) and rendered through the
   fitted camera, the fitted body in front of it, against the true mask;

@@ -68,7 +68,8 @@ def reconstruct(args) -> int:
         check_output(args.sim_out, SIM_SUFFIXES)
     result = api.reconstruct(args.image, args.category, args.camera, args.mask, args.body, args.betas, args.edge_length,
                              progress=True, silhouette=args.silhouette, silhouette_weight=args.silhouette_weight,
-                             accept_low_confidence=args.accept_low_confidence, garment=args.garment)
+                             accept_low_confidence=args.accept_low_confidence, garment=args.garment,
+                             lengths=args.lengths)
     if not result.report["silhouette"]:
         result.report["note"] = ("no mask given or estimated: the CRDL fitted the regressed lines only, without its "
                                  "silhouette term; give the garment's mask (white = garment, the image's size) to use it")
@@ -101,7 +102,7 @@ def reconstruct_outfit(args) -> int:
         check_output(args.sim_out, SIM_SUFFIXES)
     result = api.reconstruct_outfit(args.image, args.body, [args.garment] if args.garment else None, args.betas,
                                     args.edge_length, progress=True, silhouette=args.silhouette,
-                                    silhouette_weight=args.silhouette_weight)
+                                    silhouette_weight=args.silhouette_weight, lengths=args.lengths)
     result.save(args.output, source=str(args.image))
     if args.report:
         with atomic_path(args.report) as tmp:
@@ -161,6 +162,10 @@ def add_parsers(groups) -> None:
     parser.add_argument("--camera", metavar="camera.json", help="the picture's camera (docs/crdl.md)")
     add_silhouette_options(parser)
     parser.add_argument("--category", help="skip the classifier")
+    parser.add_argument("--lengths", action="store_true",
+                        help="of a photograph given alone, move the garment's lines to where its sleeves and hems end in "
+                             "the photograph before the CRDL (measured and reported either way; off by default: on "
+                             "rendered photographs they made the lines less accurate, docs/reconstruction.md)")
     parser.add_argument("--garment", choices=("upper", "lower", "dress"),
                         help="of a photograph given alone, the garment to reconstruct (default: the outer one, the top "
                              "or the dress; with -o OUT_DIR every garment); the report lists every garment seen")

@@ -81,7 +81,7 @@ def length_targets(category: str, attributes: dict, body, betas) -> dict[str, di
 def place_lines(lines: dict[str, np.ndarray], targets: dict[str, dict],
                 garment_centre: np.ndarray) -> tuple[dict[str, np.ndarray], dict[str, dict]]:
     """(``lines`` [K,3] each, the targeted ones moved along their axes to their targets' levels;
-    per moved line its s, the move in cm and whether the end ran out of the picture) — module
+    per targeted line its s, the move in cm and whether the end ran out of the picture) — module
     docstring; moves are clipped to ``MAX_EDIT``."""
     placed, report = dict(lines), {}
     for name, target in targets.items():
@@ -98,7 +98,7 @@ def place_lines(lines: dict[str, np.ndarray], targets: dict[str, dict],
 
 def reached(lines: dict[str, np.ndarray], targets: dict[str, dict], report: dict[str, dict],
             garment_centre: np.ndarray) -> dict[str, dict]:
-    """``report`` with each placed line's remaining distance (cm, along its axis) from its target on
+    """``report`` with each targeted line's remaining distance (cm, along its axis) from its target on
     the deformed garment's ``lines`` [K,3] (positive: still short of it)."""
     out = {}
     for name, entry in report.items():

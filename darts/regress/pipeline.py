@@ -136,7 +136,8 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
                 mask: np.ndarray | None = None, betas=None, edge_length: float = DATASET_EDGE_LENGTH,
                 progress: bool = False, silhouette_term: str = "outline",
                 silhouette_weight: float | None = None, accept_low_confidence: bool = False,
-                garment: str | None = None, photograph: Photograph | None = None) -> Reconstruction:
+                garment: str | None = None, photograph: Photograph | None = None,
+                lengths: bool = False) -> Reconstruction:
     """The DART of the garment in ``image`` [H,W,3] uint8 (module docstring); ``mask`` [H,W] bool
     switches the CRDL's silhouette term on and shows the classifier the garment alone; ``progress``
     shows the CRDL's steps; ``silhouette_term``: which (``darts.crdl.SILHOUETTE_WEIGHTS``),
@@ -156,7 +157,11 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
     one reconstructed is ``garment`` (upper, lower, dress; default the outer one: the top or the
     dress), or the one of ``category``'s kind, with its parsed mask; the report's ``outfit`` lists
     them all. ``photograph``: the photograph already read (``read_photograph``), so that its
-    garments are reconstructed one by one without reading it again."""
+    garments are reconstructed one by one without reading it again. The lengths read in a
+    photograph (``darts.photo.lengths``) are always measured and reported (``lengths``: each line's
+    s, the move it asks for and how far the result is from it); with ``lengths`` the lines are moved
+    there before the CRDL (off by default: on the posed renders they made the lines worse,
+    docs/reconstruction.md)."""
     from darts.crdl import SILHOUETTE_WEIGHTS
     from darts.crdl.deform import deform_dart
     from darts.crdl.layer import CrdlWeights
@@ -237,7 +242,10 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
             from darts.photo.lengths import length_targets as targets_of, place_lines
 
             length_targets = targets_of(category, chosen.attributes, body, betas)
-            lines, length_report = place_lines(lines, length_targets, template.vertices.mean(0))
+            placed, length_report = place_lines(lines, length_targets, template.vertices.mean(0))
+            if lengths:
+                lines = placed
+            length_report = {name: {**entry, "applied": lengths} for name, entry in length_report.items()}
     else:
         lines = regress_lines(image, camera, category)
     times["regress_s"] = time.perf_counter() - mark
