@@ -146,11 +146,30 @@ def read_input(path: str | os.PathLike, kind: str) -> bytes:
 MAX_IMAGE_PIXELS = 64_000_000
 
 
+def _as_8_bit(image):
+    """``image`` (PIL) with 8 bits a channel: a 16-bit or 32-bit integer or a float grey image is
+    scaled from its type's range (16-bit: / 257; 32-bit integer: its own maximum, or 16-bit's when
+    under it; float: 0..1, or its maximum when above 1) instead of clipped at 255 as PIL's convert does."""
+    from PIL import Image
+
+    if image.mode not in ("I", "I;16", "I;16B", "I;16L", "I;16N", "F"):
+        return image
+    values = np.asarray(image, np.float64)
+    if image.mode == "F":
+        top = max(1.0, float(values.max(initial=0.0)))
+    elif image.mode == "I":
+        top = max(65535.0, float(values.max(initial=0.0)))
+    else:
+        top = 65535.0
+    return Image.fromarray(np.clip(np.rint(values / top * 255.0), 0, 255).astype(np.uint8), mode="L")
+
+
 def read_image(path: str | os.PathLike, mode: str = "RGB") -> np.ndarray:
-    """An image file as an array ([H,W,3] uint8 for mode RGB, [H,W] for L), or a DartsInputError:
-    not an image, damaged, or more than MAX_IMAGE_PIXELS pixels (checked from the header, before
-    anything is decoded)."""
-    from PIL import Image, UnidentifiedImageError
+    """An image file as an array ([H,W,3] uint8 for mode RGB, [H,W] for L) as a viewer shows it (its
+    EXIF orientation applied; 16-bit and float grey scaled to 8 bits, ``_as_8_bit``), or a
+    DartsInputError: not an image, damaged, or more than MAX_IMAGE_PIXELS pixels (checked from the
+    header, before anything is decoded)."""
+    from PIL import Image, ImageOps, UnidentifiedImageError
 
     path = check_input_file(path, "image")
     limit, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None  # our own limit, with the size in its message
@@ -160,7 +179,7 @@ def read_image(path: str | os.PathLike, mode: str = "RGB") -> np.ndarray:
             if width * height > MAX_IMAGE_PIXELS:
                 raise DartsInputError(path, f"the image is {width}x{height} pixels ({width * height / 1e6:.0f} "
                                             f"megapixels); at most {MAX_IMAGE_PIXELS / 1e6:.0f} megapixels are read")
-            return np.asarray(image.convert(mode))
+            return np.asarray(_as_8_bit(ImageOps.exif_transpose(image)).convert(mode))
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:  # PIL's errors for damaged files
         raise DartsInputError(path, f"not an image ({exc})") from None
     finally:

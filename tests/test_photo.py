@@ -296,3 +296,25 @@ def test_the_body_fits_adam_is_torchs():
             (((x - torch.arange(5.0, dtype=torch.float64)) ** 4).sum() + x.sin().sum()).backward()
             optimiser.step()
     assert torch.equal(ours, theirs)
+
+
+def test_photographs_are_read_as_a_viewer_shows_them(tmp_path):
+    """A JPEG whose EXIF orientation is 6 (stored sideways, shown turned 90 degrees clockwise) is
+    read upright; a 16-bit grey PNG is scaled to 8 bits, not clipped to white."""
+    from PIL import Image
+
+    from darts.fileio import read_image
+
+    stored = np.zeros((40, 60, 3), np.uint8)
+    stored[:, :10] = 255  # a white band along the stored picture's left edge
+    picture = Image.fromarray(stored)
+    exif = picture.getexif()
+    exif[0x0112] = 6
+    picture.save(tmp_path / "turned.jpg", exif=exif.tobytes(), quality=95)
+    shown = read_image(tmp_path / "turned.jpg")
+    assert shown.shape == (60, 40, 3) and shown[:8].mean() > 240 and shown[-8:].mean() < 15
+    ramp = np.linspace(0, 65535, 64 * 64).reshape(64, 64).astype(np.uint16)
+    Image.fromarray(ramp).save(tmp_path / "grey16.png")
+    grey = read_image(tmp_path / "grey16.png", "L")
+    assert grey.min() == 0 and grey.max() == 255 and abs(grey.mean() - 127.5) < 1
+    assert np.abs(grey.astype(float) - ramp / 257.0).max() <= 0.5 + 1e-9
