@@ -10,6 +10,7 @@ Every function takes a path, a shipped name or the object itself, validates it o
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Sequence
 
@@ -163,7 +164,7 @@ def classify(image, mask=None) -> list[tuple[str, float]]:
     picture = read_picture(image)
     garment_mask = _picture_mask(mask, picture)
     if garment_mask is None:
-        outfit = read_outfit(picture if isinstance(image, np.ndarray) else image)
+        outfit = _read_outfit(image, picture, load_body(None))
         return outfit.garments[-1].ranked if outfit.garments else []
     _refuse(image, picture_problem(picture, garment_mask))
     return classify_image(picture, garment_mask)
@@ -175,17 +176,20 @@ def read_outfit(image, body=None):
     probabilities and the attributes measured; ``.notes``; ``.mask(kind)``), on the body ``body``
     (default: the bundled one) fitted to the person. A picture too small, blurred or blank, or
     without a person, raises ``DartsInputError``."""
+    return _read_outfit(image, read_picture(image), load_body(body))
+
+
+def _read_outfit(image, picture: np.ndarray, model):
+    """``read_outfit`` of ``picture`` (read from ``image``, which names it in errors) on ``model``."""
     from darts.photo.fit import fit_body
     from darts.photo.outfit import read_outfit as read
     from darts.photo.person import find_person
     from darts.regress.checks import person_problem, picture_problem
 
-    picture = read_picture(image)
     _refuse(image, picture_problem(picture, None))
     person = find_person(picture)
     if person is None:
         _refuse(image, person_problem(given_alone="give --mask for a picture of a garment alone"))
-    model = load_body(body)
     outfit = read(picture, person, fit_body(person, model, picture.shape[1], picture.shape[0]), model)
     if outfit is None:
         _refuse(image, person_problem(given_alone="give --mask for a picture of a garment alone"))
@@ -202,24 +206,44 @@ def reconstruct_outfit(image, body=None, garments: Sequence[str] | None = None, 
     layer first; one whose category is unsure, under 50 %, takes the most likely and its report
     says ``low_confidence``) and ``.save(folder)`` (the outfit folder ``darts-sim`` runs). A picture that is too
     small, blurred or blank, without a person or without such a garment raises ``DartsInputError``."""
-    from darts.crdl import check_silhouette
     from darts.photo.outfit import KINDS
     from darts.regress.pipeline import reconstruct_outfit as run
 
     wrong = [g for g in garments or [] if g not in KINDS]
     if wrong:
         raise DartsInputError(None, f"garments must be of {', '.join(KINDS)}, got {', '.join(map(repr, wrong))}")
-    check_silhouette(silhouette)
-    if not 0.003 <= edge_length <= 0.1:
-        raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
+    _check_fit_options(silhouette, edge_length)
     picture = read_picture(image)
-    model = load_body(body)
-    if betas is not None and len(betas) > model.num_betas:
-        raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
-    try:
+    model = _body_for(body, betas)
+    with _errors_named_after(image):
         return run(picture, model, list(garments) if garments else None, betas=betas, edge_length=edge_length,
                    progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight,
                    lengths=lengths)
+
+
+def _check_fit_options(silhouette: str, edge_length: float) -> None:
+    """The silhouette term's name and the template's edge length of a reconstruction, checked."""
+    from darts.crdl import check_silhouette
+
+    check_silhouette(silhouette)
+    if not 0.003 <= edge_length <= 0.1:
+        raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
+
+
+def _body_for(body, betas):
+    """The ``BodyModel`` of ``body``, checked to have room for ``betas``."""
+    model = load_body(body)
+    if betas is not None and len(betas) > model.num_betas:
+        raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
+    return model
+
+
+@contextmanager
+def _errors_named_after(image):
+    """An unnamed ``DartsInputError`` about "the picture" raised in the block, named after the
+    picture's path when ``image`` is one."""
+    try:
+        yield
     except DartsInputError as error:
         if error.source is None and isinstance(image, (str, os.PathLike)):
             raise DartsInputError(image, error.problem.removeprefix("the picture ")) from None
@@ -262,23 +286,19 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     ``outfit`` lists them all and its ``lengths`` what the photograph shows of the garment's
     lengths; ``lengths`` moves the lines there before the CRDL (``darts.regress.pipeline``)."""
     from darts.camera import Camera
-    from darts.crdl import check_silhouette
     from darts.regress.pipeline import reconstruct as run
     from darts.templates.categories import CATEGORIES
 
     if category is not None and category not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{category}' (one of {', '.join(CATEGORIES)})")
     if garment is not None:
-        from darts.photo.outfit import KIND_OF, KINDS
+        from darts.photo.outfit import A_KIND, KIND_OF, KINDS
 
         if garment not in KINDS:
             raise DartsInputError(None, f"garment must be one of {', '.join(KINDS)}, got {garment!r}")
         if category is not None and KIND_OF[category] != garment:
-            raise DartsInputError(None, f"category {category} is a{'n' if KIND_OF[category] == 'upper' else ''} "
-                                        f"{KIND_OF[category]} garment, not {garment}")
-    check_silhouette(silhouette)
-    if not 0.003 <= edge_length <= 0.1:
-        raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
+            raise DartsInputError(None, f"category {category} is {A_KIND[KIND_OF[category]]}, not {A_KIND[garment]}")
+    _check_fit_options(silhouette, edge_length)
     picture = read_picture(image)
     source = None if camera is None or isinstance(camera, Camera) else camera
     if source is not None:
@@ -286,14 +306,8 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     if camera is not None and (camera.width, camera.height) != (picture.shape[1], picture.shape[0]):
         raise DartsInputError(source, f"is {camera.width}x{camera.height} pixels but the image is "
                                       f"{picture.shape[1]}x{picture.shape[0]}")
-    model = load_body(body)
-    if betas is not None and len(betas) > model.num_betas:
-        raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
-    try:
+    model = _body_for(body, betas)
+    with _errors_named_after(image):
         return run(picture, model, category, camera, _picture_mask(mask, picture), betas=betas, edge_length=edge_length,
                    progress=progress, silhouette_term=silhouette, silhouette_weight=silhouette_weight,
                    accept_low_confidence=accept_low_confidence, garment=garment, lengths=lengths)
-    except DartsInputError as error:
-        if error.source is None and isinstance(image, (str, os.PathLike)):
-            raise DartsInputError(image, error.problem.removeprefix("the picture ")) from None
-        raise

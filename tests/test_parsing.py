@@ -88,7 +88,8 @@ def _read(scene, image, person):
     body, vertices, labels, _, landmarks, camera = scene
     parsing = parse_person(image, person, landmarks, np.ones(len(landmarks)), vertices, np.asarray(body.faces), labels,
                            camera)
-    return parsing, garments_seen(parsing, landmarks)
+    garments, notes, read = garments_seen(parsing, landmarks)
+    return read, (garments, notes)
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> float:

@@ -305,26 +305,31 @@ def off_the_legs(parsing: Parsing, cloth: tuple[int, ...]) -> float | None:
     return float((on_legs & ~body).sum() / on_legs.sum())
 
 
-def garments_seen(parsing: Parsing, landmarks: np.ndarray,
-                  visibility: np.ndarray | None = None) -> tuple[list[GarmentGuess], list[str]]:
+def _share(parsing: Parsing, label: int) -> float:
+    """The share of the person's pixels labelled ``label``."""
+    return float((parsing.labels == label).sum() / max((parsing.labels != BACKGROUND).sum(), 1))
+
+
+def garments_seen(parsing: Parsing, landmarks: np.ndarray, visibility: np.ndarray | None = None
+                  ) -> tuple[list[GarmentGuess], list[str], Parsing]:
     """(every visible garment, outermost last: the lower garment, then the top or the dress;
-    notes on what could not be seen) of a parsed person whose BlazePose ``landmarks`` [33,2] are in
+    notes on what could not be seen; the parsing as read: a one-piece cloth read as a suit split
+    into its two garments' labels) of a parsed person whose BlazePose ``landmarks`` [33,2] are in
     picture pixels, with their ``visibility`` [33] (module docstring)."""
     points = parsing.to_crop(landmarks)
-    person = parsing.labels != BACKGROUND
-    share = {label: (parsing.labels == label).sum() / max(person.sum(), 1) for label in (UPPER, LOWER, DRESS)}
     garments, notes = [], []
-    if share[DRESS] >= MIN_GARMENT_SHARE:
+    if _share(parsing, DRESS) >= MIN_GARMENT_SHARE:
         lower, _, _, fill = _lower(parsing, points, (DRESS,), _knees_seen(visibility))
         if fill is not None and fill < SUIT_FILL:  # one colour, trousers seen below: a suit, two garments
             notes.append("one cloth from the shoulders to the legs but trousers below: taken as a top and trousers")
-            return _separates(parsing.split_one_piece(), points, notes, visibility)
+            suit = parsing.split_one_piece()
+            return (*_separates(suit, points, notes, visibility), suit)
         sleeves, p_sleeve = _sleeves(parsing, points, (DRESS,))
         attributes = {**sleeves, **lower, "one_piece": parsing.evidence}
         names = {"long": "long-sleeve-dress", "short": "short-sleeve-dress", "none": "sleeveless-dress"}
         garments.append(GarmentGuess("dress", DRESS, _ranked({names[k]: p for k, p in p_sleeve.items()}), attributes))
-        return garments, notes
-    return _separates(parsing, points, notes, visibility)
+        return garments, notes, parsing
+    return (*_separates(parsing, points, notes, visibility), parsing)
 
 
 def _seen(visibility: np.ndarray | None, landmark: str) -> bool:
@@ -343,10 +348,8 @@ def _knees_seen(visibility: np.ndarray | None) -> bool:
 def _separates(parsing: Parsing, points: np.ndarray, notes: list[str],
                visibility: np.ndarray | None) -> tuple[list[GarmentGuess], list[str]]:
     """The lower garment and the top of a person in two garments (crop pixels ``points``)."""
-    person = parsing.labels != BACKGROUND
-    share = {label: (parsing.labels == label).sum() / max(person.sum(), 1) for label in (UPPER, LOWER)}
     garments = []
-    if share[LOWER] >= MIN_GARMENT_SHARE:
+    if _share(parsing, LOWER) >= MIN_GARMENT_SHARE:
         lower, p_long, p_skirt, _ = _lower(parsing, points, (LOWER,), _knees_seen(visibility))
         if p_long is None:
             notes.append("the lower garment is not seen along the legs: its kind and length are guessed")
@@ -357,7 +360,7 @@ def _separates(parsing: Parsing, points: np.ndarray, notes: list[str],
         garments.append(GarmentGuess("lower", LOWER, _ranked(probabilities), lower))
     else:
         notes.append("no lower garment in the picture (the legs are out of frame or bare)")
-    if share[UPPER] >= MIN_GARMENT_SHARE:
+    if _share(parsing, UPPER) >= MIN_GARMENT_SHARE:
         sleeves, p_sleeve = _sleeves(parsing, points, (UPPER,))
         names = {"long": "long-sleeve-top", "short": "short-sleeve-top", "none": "sleeveless-top"}
         garments.append(GarmentGuess("upper", UPPER, _ranked({names[k]: p for k, p in p_sleeve.items()}),

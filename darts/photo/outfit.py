@@ -14,6 +14,8 @@ from darts.photo.attributes import GarmentGuess, garments_seen
 from darts.photo.parsing import DRESS, LOWER, UPPER, Parsing, parse_person
 
 KINDS = {"upper": UPPER, "lower": LOWER, "dress": DRESS}
+#: each kind with its article, for messages
+A_KIND = {"upper": "an upper garment", "lower": "a lower garment", "dress": "a dress"}
 KIND_OF = {"long-sleeve-top": "upper", "short-sleeve-top": "upper", "sleeveless-top": "upper",
            "long-pants": "lower", "short-pants": "lower", "long-skirt": "lower", "short-skirt": "lower",
            "long-sleeve-dress": "dress", "short-sleeve-dress": "dress", "sleeveless-dress": "dress"}
@@ -55,13 +57,5 @@ def read_outfit(image: np.ndarray, person, fit, body) -> PhotoOutfit | None:
                            np.asarray(body.faces), body_segmentation(body), fit.posed_camera)
     if parsing is None:
         return None
-    garments, notes = garments_seen(parsing, person.landmarks, person.visibility)
-    parsing = _as_read(parsing, garments)
-    return PhotoOutfit(parsing, garments, notes)
-
-
-def _as_read(parsing: Parsing, garments: list[GarmentGuess]) -> Parsing:
-    """The parsing whose labels match the garments read: a one-piece cloth read as a suit is split."""
-    if parsing.one_piece and all(g.kind != "dress" for g in garments):
-        return parsing.split_one_piece()
-    return parsing
+    garments, notes, read = garments_seen(parsing, person.landmarks, person.visibility)
+    return PhotoOutfit(read, garments, notes)

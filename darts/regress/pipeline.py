@@ -183,9 +183,9 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
     if looked and person is None and mask is None and not accept_low_confidence:
         raise DartsInputError(None, f"the picture {person_problem()}")
     low_confidence = looked and mask is None and person is None
-    given_mask, garment_ranked, kind = mask is not None, None, None
+    given_mask, garment_ranked, kind, chosen = mask is not None, None, None, None
     if person is not None and mask is None:  # a photograph given alone: every garment it shows
-        from darts.photo.outfit import KIND_OF
+        from darts.photo.outfit import A_KIND, KIND_OF
 
         kind = garment or (KIND_OF[category] if category else None)
         if kind is None:  # the outer garment: the top or the dress, else what there is
@@ -214,8 +214,8 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
         if problem and not accept_low_confidence:
             if garment_ranked is not None:  # the parsing saw the garment; its category is what is unsure
                 others = ", ".join(f"{c} {100 * p:.0f} %" for c, p in ranked[:3])
-                problem = (f"shows a{'n' if kind == 'upper' else ''} {kind} garment whose category is unsure ({others}; at "
-                           "least 50 % needed); give --category, or --accept-low-confidence to go on")
+                problem = (f"shows {A_KIND[kind]} whose category is unsure ({others}; at least 50 % needed); give "
+                           "--category, or --accept-low-confidence to go on")
             raise DartsInputError(None, f"the picture {problem}")
         low_confidence = low_confidence or problem is not None
     else:
@@ -237,7 +237,6 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
     if posed:  # the lines as the posed body shows them, taken back to its rest pose
         lines = regress_posed_lines(image, mask, body_fit.camera, body, body_fit.pose, betas, category,
                                     template_lines(template, category))
-        chosen = outfit.garment(kind) if outfit is not None and kind is not None else None
         if chosen is not None:  # the lengths the photograph shows, where the garment ends along the body
             from darts.photo.lengths import length_targets as targets_of, place_lines
 
@@ -321,9 +320,11 @@ class OutfitReconstruction:
 def reconstruct_outfit(image: np.ndarray, body, kinds: list[str] | None = None, **options) -> OutfitReconstruction:
     """Every garment of the photograph ``image`` [H,W,3] uint8 (or those of ``kinds``: upper, lower,
     dress), each reconstructed on the body fitted once to the person (``reconstruct``'s
-    ``options``: betas, edge_length, progress, silhouette_term, silhouette_weight,
-    accept_low_confidence), inner layer first. No person, or no garment of ``kinds`` seen, raises
+    ``options``: betas, edge_length, progress, silhouette_term, silhouette_weight, lengths), inner
+    layer first; a garment whose category is unsure (under 50 %) takes its most likely one and its
+    report says ``low_confidence``. No person, or no garment of ``kinds`` seen, raises
     ``DartsInputError``."""
+    from darts.photo.outfit import A_KIND
     from darts.regress.checks import person_problem, picture_problem
 
     problem = picture_problem(image, None)
@@ -336,8 +337,8 @@ def reconstruct_outfit(image: np.ndarray, body, kinds: list[str] | None = None, 
     wanted = [k for k in seen if kinds is None or k in kinds]
     if not wanted:
         said = ", ".join(f"{g.kind} ({g.category})" for g in photograph.outfit.garments) if seen else "none"
-        raise DartsInputError(None, f"the picture shows a person but no {' or '.join(kinds or [''])} garment "
-                                    f"(garments seen: {said})".replace("no  garment", "no garment"))
+        missing = f"not {' or '.join(A_KIND[k] for k in kinds)}" if kinds else "no garment"
+        raise DartsInputError(None, f"the picture shows a person but {missing} (garments seen: {said})")
     # Every garment seen is reconstructed: one whose category is unsure (under 50 %) takes its most
     # likely one, and its report says low_confidence.
     options = {**options, "accept_low_confidence": True}
