@@ -10,7 +10,7 @@ import pytest
 
 from darts.body.segmentation import PART_INDEX, body_segmentation
 from darts.camera import Camera
-from darts.photo.attributes import ARM, LEG, _point_at, _project, garments_seen
+from darts.photo.attributes import ARM, LEG, _project, chain, garments_seen, point_at
 from darts.photo.fit import FLIP, landmark_table
 from darts.photo.parsing import DRESS, LOWER, UPPER, parse_person, part_image
 from darts.photo.person import LANDMARKS
@@ -38,7 +38,7 @@ def scene():
 
 def _limb_s(landmarks: np.ndarray, side: str, joints) -> np.ndarray:
     """s along the limb (0 shoulder or hip, 1 wrist or ankle) of every pixel [H,W]."""
-    polyline = np.array([landmarks[LANDMARKS.index(f"{side}_{j}")] for j in joints])
+    polyline = chain(landmarks, side, joints)
     rows, cols = np.mgrid[:HEIGHT, :WIDTH]
     s, _ = _project(np.stack([cols.ravel() + 0.5, rows.ravel() + 0.5], 1), polyline)
     return s.reshape(HEIGHT, WIDTH)
@@ -70,12 +70,12 @@ def _dress_up(scene, sleeve: float, hem: float | None, dress: bool = False):
         from matplotlib.path import Path as Polygon
         from scipy import ndimage
 
-        left, right = (np.array([landmarks[LANDMARKS.index(f"{side}_{j}")] for j in LEG]) for side in ("left", "right"))
+        left, right = (chain(landmarks, side, LEG) for side in ("left", "right"))
         steps = np.linspace(0.0, hem, 12)
-        outline = [_point_at(left, t) for t in steps] + [_point_at(right, t) for t in steps[::-1]]
+        outline = [point_at(left, t) for t in steps] + [point_at(right, t) for t in steps[::-1]]
         rows, cols = np.mgrid[:HEIGHT, :WIDTH]
         between = Polygon(np.array(outline)).contains_points(np.stack([cols.ravel() + 0.5, rows.ravel() + 0.5], 1))
-        between = ndimage.binary_dilation(between.reshape(HEIGHT, WIDTH), iterations=4) & (rows < _point_at(left, hem)[1])
+        between = ndimage.binary_dilation(between.reshape(HEIGHT, WIDTH), iterations=4) & (rows < point_at(left, hem)[1])
         lower |= between
         person = person | between
         upper, lower = upper | lower, np.zeros_like(lower)
@@ -130,7 +130,7 @@ def test_lengths_read_place_the_lines_at_the_measured_ends(scene):
     top): its cuffs move out along the arms to the point 40 % of the way from elbow to wrist, its hem
     up to that level; an end that runs out of the picture only lengthens."""
     from darts.dart.io import load_dart
-    from darts.photo.lengths import ARM, _chain, length_targets, place_lines, point_at, rest_landmarks
+    from darts.photo.lengths import length_targets, place_lines, rest_landmarks
     from darts.regress.posed_lines import template_lines
     from darts.templates.categories import CATEGORIES
 
@@ -143,7 +143,7 @@ def test_lengths_read_place_the_lines_at_the_measured_ends(scene):
     targets = length_targets("short-sleeve-top", attributes, body, None)
     placed, report = place_lines(lines, targets, centre)
     points = rest_landmarks(body, None)
-    wrist_side = point_at(_chain(points, "left", ARM), 0.7)
+    wrist_side = point_at(chain(points, "left", ARM), 0.7)
     assert np.allclose(targets["left_cuff"]["point"], wrist_side)
     assert abs(placed["left_cuff"].mean(0)[0] - wrist_side[0]) < 0.02  # the arm runs along +X at rest
     assert report["left_cuff"]["moved_cm"] > 10 and report["hem"]["moved_cm"] < -5

@@ -143,7 +143,8 @@ def limb_coverage(parsing: Parsing, polyline: np.ndarray, parts: list[str], clot
     return LimbCoverage(coverage, float(end), beyond, len(seen))
 
 
-def _limb(landmarks: np.ndarray, side: str, joints: tuple[str, ...]) -> np.ndarray:
+def chain(landmarks: np.ndarray, side: str, joints: tuple[str, ...]) -> np.ndarray:
+    """[len(joints),D] the ``side`` landmarks of ``joints`` (``ARM``, ``LEG``) of ``landmarks`` [33,D]."""
     from darts.photo.person import LANDMARKS
 
     return np.array([landmarks[LANDMARKS.index(f"{side}_{j}")] for j in joints])
@@ -160,10 +161,10 @@ def _garment_end(limbs: list[LimbCoverage]) -> tuple[float | None, bool]:
     return float(shortest.end), shortest.beyond_picture
 
 
-def _point_at(leg: np.ndarray, s: float) -> np.ndarray:
-    """The point at ``s`` along the two-bone polyline ``leg`` [3,2]."""
+def point_at(polyline: np.ndarray, s: float) -> np.ndarray:
+    """The point at ``s`` in [0, 1] along a two-bone ``polyline`` [3,D] (0.5 at its middle point)."""
     bone = min(int(s * 2), 1)
-    return leg[bone] + (s * 2 - bone) * (leg[bone + 1] - leg[bone])
+    return polyline[bone] + (s * 2 - bone) * (polyline[bone + 1] - polyline[bone])
 
 
 def between_legs_fill(parsing: Parsing, legs: list[np.ndarray], cloth: tuple[int, ...], hem: float) -> float | None:
@@ -179,7 +180,7 @@ def between_legs_fill(parsing: Parsing, legs: list[np.ndarray], cloth: tuple[int
     if hem < MIN_GAP_HEM:  # a short garment ends about where the legs part: no gap to read
         return None
     steps = np.linspace(0.0, hem, 12)
-    outline = [_point_at(legs[0], t) for t in steps] + [_point_at(legs[1], t) for t in steps[::-1]]
+    outline = [point_at(legs[0], t) for t in steps] + [point_at(legs[1], t) for t in steps[::-1]]
     size = len(parsing.labels)
     rows, cols = np.mgrid[:size, :size]
     inside = Polygon(np.array(outline)).contains_points(np.stack([cols.ravel() + 0.5, rows.ravel() + 0.5], 1))
@@ -232,7 +233,7 @@ def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) ->
     arm read the sleeves take ``SLEEVE_PRIOR``. (Leaving out arms whose elbow BlazePose does not
     see was measured and dropped: 69.2 % of the posed renders' categories with it, 70.0 % without,
     no photograph changed.)"""
-    arms = {side: limb_coverage(parsing, _limb(landmarks, side, ARM), [f"{side}_upper_arm", f"{side}_forearm",
+    arms = {side: limb_coverage(parsing, chain(landmarks, side, ARM), [f"{side}_upper_arm", f"{side}_forearm",
                                                                        f"{side}_hand"], cloth)
             for side in ("left", "right")}
     end, beyond = _garment_end(list(arms.values()))
@@ -246,7 +247,7 @@ def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) ->
 
 
 def torso_line(landmarks: np.ndarray) -> np.ndarray:
-    """[3,2] the body's middle line: between the shoulders, the hips and the knees (``landmarks`` [33,2])."""
+    """[3,D] the body's middle line: between the shoulders, the hips and the knees (``landmarks`` [33,D])."""
     from darts.photo.person import LANDMARKS
 
     def middle(joint: str) -> np.ndarray:
@@ -269,7 +270,7 @@ def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...],
            read_gap: bool = True) -> tuple[dict, float | None, float | None, float | None]:
     """(evidence, P(long), P(skirt), the fill between the legs) of the garment below the waist
     labelled ``cloth``."""
-    polylines = {side: _limb(landmarks, side, LEG) for side in ("left", "right")}
+    polylines = {side: chain(landmarks, side, LEG) for side in ("left", "right")}
     legs = {side: limb_coverage(parsing, polylines[side], [f"{side}_thigh", f"{side}_calf", f"{side}_foot"], cloth)
             for side in ("left", "right")}
     end, beyond = _garment_end(list(legs.values()))

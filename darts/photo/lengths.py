@@ -18,10 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from darts.crdl.targets import MAX_EDIT, loop_frame
+from darts.photo.attributes import ARM, LEG, chain, point_at, torso_line
 from darts.templates.categories import CATEGORIES
-
-ARM = ("shoulder", "elbow", "wrist")
-LEG = ("hip", "knee", "ankle")
 
 
 def rest_landmarks(body, betas) -> np.ndarray:
@@ -38,18 +36,6 @@ def rest_landmarks(body, betas) -> np.ndarray:
     return np.array([joints[body.joint_names.index(j)] for j in names]) + offsets
 
 
-def point_at(polyline: np.ndarray, s: float) -> np.ndarray:
-    """The point at ``s`` in [0, 1] along a two-bone ``polyline`` [3,D] (0.5 at its middle point)."""
-    bone = min(int(s * 2), 1)
-    return polyline[bone] + (s * 2 - bone) * (polyline[bone + 1] - polyline[bone])
-
-
-def _chain(points: np.ndarray, side: str, joints: tuple[str, ...]) -> np.ndarray:
-    from darts.photo.person import LANDMARKS
-
-    return np.array([points[LANDMARKS.index(f"{side}_{j}")] for j in joints])
-
-
 def length_targets(category: str, attributes: dict, body, betas) -> dict[str, dict]:
     """{line name: {"point": T [3], "s": s, "beyond_picture": bool}} for every line of ``category``
     whose end the photograph's ``attributes`` (a garment's, ``darts.photo.attributes``) measure."""
@@ -59,11 +45,11 @@ def length_targets(category: str, attributes: dict, body, betas) -> dict[str, di
     sleeve = attributes.get("sleeve_end")
     if sleeve is not None and CATEGORIES[category].sleeved:
         for side in ("left", "right"):
-            targets[f"{side}_cuff"] = {"point": point_at(_chain(points, side, ARM), sleeve), "s": sleeve,
+            targets[f"{side}_cuff"] = {"point": point_at(chain(points, side, ARM), sleeve), "s": sleeve,
                                        "beyond_picture": bool(attributes.get("sleeve_beyond_picture"))}
     hem, beyond = attributes.get("hem_end"), bool(attributes.get("hem_beyond_picture"))
     if hem is not None:
-        legs = {side: point_at(_chain(points, side, LEG), hem) for side in ("left", "right")}
+        legs = {side: point_at(chain(points, side, LEG), hem) for side in ("left", "right")}
         for side in ("left", "right"):
             if f"{side}_hem" in names:
                 targets[f"{side}_hem"] = {"point": legs[side], "s": hem, "beyond_picture": beyond}
@@ -71,9 +57,7 @@ def length_targets(category: str, attributes: dict, body, betas) -> dict[str, di
             targets["hem"] = {"point": 0.5 * (legs["left"] + legs["right"]), "s": hem, "beyond_picture": beyond}
     top = attributes.get("top_hem_end")
     if top is not None and "hem" in names and "hem" not in targets:
-        middle = np.array([0.5 * (a + b) for a, b in zip(_chain(points, "left", ("shoulder", "hip", "knee")),
-                                                          _chain(points, "right", ("shoulder", "hip", "knee")))])
-        targets["hem"] = {"point": point_at(middle, top), "s": top,
+        targets["hem"] = {"point": point_at(torso_line(points), top), "s": top,
                           "beyond_picture": bool(attributes.get("torso", {}).get("beyond_picture"))}
     return targets
 
