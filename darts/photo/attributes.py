@@ -15,7 +15,7 @@ A limb bare where it first comes into view (past s = 0.2) has its end hidden and
 two limbs the shorter end counts (``_garment_end``).
 
 - **Sleeves**: the arms' end (an arm out of sight left out); P(none) = sigma((0.12 -
-  s) / 0.03), P(long) = sigma((s - 0.45) / 0.04) (a sleeve to the elbow or further: rolled and 3/4
+  s) / 0.03), P(long) = sigma((s - 0.49) / 0.04) (a sleeve past the elbow: rolled and 3/4
   sleeves are long sleeves), P(short) the rest; a sleeve covered out of the picture from at least
   s = 0.3 is long at 0.6 or more.
 - **Lower garment's length**: the legs' ends; P(long) = sigma((s - 0.55) / 0.05) (the knee is 0.5).
@@ -24,11 +24,13 @@ two limbs the shorter end counts (``_garment_end``).
 - **Skirt or pants**: the gap between the legs down to the hem — inside the polygon of the two
   legs' polylines, off the fitted body's silhouette (below its crotch) — and the share of it that
   is the garment's cloth against background (a skirt fills the gap, trousers leave it open; skin
-  there is a leg the fit put elsewhere); P(skirt) = sigma((fill - 0.65) / 0.06). Where no gap
-  shows (legs together, crossed or seen from the side, knees not seen) but the garment is long
-  (hem past s = 0.45), how far it hangs off the legs: the share of its leg pixels off the fitted
-  body's silhouette, P(skirt) = sigma((off - 0.33) / 0.06) (``off_the_legs``); a hem above
-  s = 0.45, where the legs part, gives neither: ``SKIRT_PRIOR``. One cloth from the shoulders down is a dress unless the gap is clearly open
+  there is a leg the fit put elsewhere); P(skirt) = sigma((fill - 0.65) / 0.06), read for hems
+  past s = 0.45 (above it, where the legs part, the gap is the garment's own crotch). Where no gap
+  is read (a short garment; legs together, crossed or seen from the side; knees not seen), how
+  the garment hangs at its hem: the share of its leg pixels from 0.6 of its hem's s down that lie
+  off the fitted body's silhouette, P(skirt) = sigma((off - 0.2) / 0.04) (``off_the_legs``: a skirt
+  stands away from the thighs at its hem, shorts and trousers follow them); with the hem out of
+  the picture, neither: ``SKIRT_PRIOR``. One cloth from the shoulders down is a dress unless the gap is clearly open
   (fill under 0.35): then a suit, a top and trousers.
 """
 from __future__ import annotations
@@ -53,6 +55,9 @@ REACH = 0.12
 TORSO_REACH = 0.15
 #: the least gap between the legs (crop pixels, of 256) that says anything of what fills it
 MIN_GAP_PIXELS = 25
+#: the sleeve end (s) at which short and long sleeves are as likely: past the elbow (0.5 less a
+#: little: the elbow's landmark sits inside the joint)
+LONG_SLEEVE = 0.49
 #: P(none / short / long) of sleeves no arm shows
 SLEEVE_PRIOR = {"none": 0.15, "short": 0.4, "long": 0.45}
 #: the share of cloth in the gap between the legs at which a skirt and trousers are as likely, and
@@ -62,7 +67,9 @@ SKIRT_FILL, MIN_GAP_HEM = 0.65, 0.45
 SUIT_FILL = 0.35
 #: with no gap to read, the share of a long garment's leg pixels off the fitted legs at which a
 #: skirt and trousers are as likely
-SKIRT_OFF_BODY = 0.33
+SKIRT_OFF_BODY = 0.2
+#: the lower part of a garment, from this share of its hem's s down, says how it hangs
+HEM_BAND = 0.6
 #: P(skirt) when no gap between the legs shows
 SKIRT_PRIOR = 0.35
 ARM = ("shoulder", "elbow", "wrist")
@@ -195,7 +202,7 @@ def between_legs_fill(parsing: Parsing, legs: list[np.ndarray], cloth: tuple[int
 
 def _sleeve_probabilities(end: float) -> dict[str, float]:
     none = float(expit((0.12 - end) / 0.03))
-    long = float(expit((end - 0.45) / 0.04))
+    long = float(expit((end - LONG_SLEEVE) / 0.04))
     short = max(0.0, 1.0 - none - long)
     total = none + short + long
     return {"none": none / total, "short": short / total, "long": long / total}
@@ -278,11 +285,12 @@ def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...],
     p_long = None if end is None else float(expit((end - 0.55) / 0.05))
     if beyond and p_long is not None and p_long < 0.6:
         p_long = 0.6  # the hem is out of the picture: at least this long, more likely long than short
-    off_body = off_the_legs(parsing, cloth)
+    # how the garment hangs at its hem, where the hem is in the picture
+    off_body = None if end is None or beyond else off_the_legs(parsing, polylines, cloth, end)
     if fill is not None:
         p_skirt = float(expit((fill - SKIRT_FILL) / 0.06))
-    elif off_body is not None and end is not None and end >= MIN_GAP_HEM:
-        p_skirt = float(expit((off_body - SKIRT_OFF_BODY) / 0.06))
+    elif off_body is not None:
+        p_skirt = float(expit((off_body - SKIRT_OFF_BODY) / 0.04))
     else:
         p_skirt = None
     evidence = {"hem_end": None if end is None else round(end, 3), "hem_beyond_picture": beyond,
@@ -292,18 +300,25 @@ def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...],
     return evidence, p_long, p_skirt, fill
 
 
-def off_the_legs(parsing: Parsing, cloth: tuple[int, ...]) -> float | None:
-    """The share of the ``cloth`` pixels nearest the thighs and calves that lie off the fitted body's
-    silhouette (grown by 2 pixels): a skirt hangs away from the legs, trousers follow them. None
-    with under ``MIN_GAP_PIXELS`` such pixels."""
+def off_the_legs(parsing: Parsing, legs: dict[str, np.ndarray], cloth: tuple[int, ...], hem: float) -> float | None:
+    """The share of the ``cloth`` pixels nearest the thighs and calves, in the lower part of the
+    garment (s from ``HEM_BAND`` x ``hem`` to ``hem`` along their leg's polyline in ``legs``), that
+    lie off the fitted body's silhouette (grown by 2 pixels): a skirt hangs away from the legs
+    towards its hem, trousers and shorts follow them (at the waist both sit on the body). None with
+    under ``MIN_GAP_PIXELS`` such pixels."""
     from scipy import ndimage
 
-    on_legs = np.isin(parsing.parts, [PART_INDEX[f"{side}_{part}"] for side in ("left", "right")
-                                      for part in ("thigh", "calf")]) & np.isin(parsing.labels, cloth)
-    if on_legs.sum() < MIN_GAP_PIXELS:
-        return None
     body = ndimage.binary_dilation(parsing.body_parts >= 0, iterations=2)
-    return float((on_legs & ~body).sum() / on_legs.sum())
+    near_hem = np.zeros(parsing.labels.shape, bool)
+    for side, polyline in legs.items():
+        rows, cols = np.nonzero(np.isin(parsing.parts, [PART_INDEX[f"{side}_thigh"], PART_INDEX[f"{side}_calf"]])
+                                & np.isin(parsing.labels, cloth))
+        s, _ = _project(np.stack([cols + 0.5, rows + 0.5], 1), polyline)
+        band = (s >= HEM_BAND * hem) & (s <= hem + 0.02)
+        near_hem[rows[band], cols[band]] = True
+    if near_hem.sum() < MIN_GAP_PIXELS:
+        return None
+    return float((near_hem & ~body).sum() / near_hem.sum())
 
 
 def _share(parsing: Parsing, label: int) -> float:
