@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -97,6 +98,40 @@ def test_no_person_in_pictures_without_one(name):
                "gift box": lambda: _picture(GIFT_BOX),
                "grey": lambda: np.full((300, 200, 3), 128, np.uint8)}[name]()
     assert find_person(picture) is None
+
+
+@pytest.mark.parametrize("name", ["logo", "retina", "chelsea"])
+def test_no_person_in_the_pictures_nearest_to_one(name):
+    """scikit-image's samples (installed with gpytoolbox) that the detector's weaker candidates take
+    for a person: its logo (presence 0.97, crispness 0.61), the retina (presence 0.74), a cat."""
+    data = pytest.importorskip("skimage.data")
+    picture = np.ascontiguousarray(np.asarray(getattr(data, name)())[..., :3])
+    assert find_person(picture) is None
+
+
+def test_a_weaker_detection_is_taken_only_with_a_sure_person(monkeypatch):
+    """When the best detection's region holds no person the next candidates are tried, and one is
+    taken only at a presence of 0.9 with a crisp mask."""
+    import darts.photo.person as person_module
+
+    def candidate(score, presence, mask_value):
+        mask = np.zeros((40, 40), np.float32)
+        mask[10:30, 15:25] = mask_value
+        return score, presence, mask
+
+    def run(candidates):
+        detections = {c[0]: c for c in candidates}
+        monkeypatch.setattr(person_module, "detect_people", lambda image, min_score=None: [
+            SimpleNamespace(score=c[0]) for c in candidates if c[0] >= (min_score or 0.5)])
+        monkeypatch.setattr(person_module, "person_in", lambda image, d: SimpleNamespace(
+            presence=detections[d.score][1], mask=detections[d.score][2], score=d.score))
+        return person_module.find_person(np.zeros((40, 40, 3), np.uint8))
+
+    assert run([candidate(0.6, 0.1, 1.0), candidate(0.4, 0.99, 1.0)]).score == 0.4
+    assert run([candidate(0.6, 0.95, 0.3)]).score == 0.6  # the best detection keeps its own rule
+    assert run([candidate(0.6, 0.1, 1.0), candidate(0.4, 0.99, 0.3)]) is None  # a soft mask
+    assert run([candidate(0.6, 0.1, 1.0), candidate(0.4, 0.85, 1.0)]) is None  # presence under 0.9
+    assert run([candidate(0.6, 0.1, 1.0), candidate(0.2, 0.99, 1.0)]) is None  # scores under 0.25
 
 
 def test_reconstruct_refuses_a_picture_without_a_person_in_one_line(tmp_path):

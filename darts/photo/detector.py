@@ -98,11 +98,12 @@ def _iou(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     return overlap / np.maximum(area(box) + area(boxes) - overlap, 1e-12)
 
 
-def decode(regression: np.ndarray, logits: np.ndarray, width: int, height: int) -> list[Detection]:
-    """Detections from the model's outputs ([2254,12], [2254]) on a ``width`` x ``height`` picture,
-    best first, after weighted non-maximum suppression."""
+def decode(regression: np.ndarray, logits: np.ndarray, width: int, height: int,
+           min_score: float = MIN_SCORE) -> list[Detection]:
+    """Detections from the model's outputs ([2254,12], [2254]) on a ``width`` x ``height`` picture
+    scoring at least ``min_score``, best first, after weighted non-maximum suppression."""
     score = expit(np.clip(logits, -100.0, 100.0))
-    keep = score >= MIN_SCORE
+    keep = score >= min_score
     if not keep.any():
         return []
     centre = anchors()[keep]
