@@ -10,9 +10,10 @@ body model), ``darts.motion`` (AMASS-format motions), ``darts.templates``, ``dar
 kilograms.
 """
 from darts.errors import DartsInputError
-from darts.lazy import lazy_exports
+from darts.lazy import lazy_exports as _lazy_exports
 
 __version__ = "0.1.0"
-__getattr__, _API = lazy_exports(__name__, {name: "api" for name in (
-    "load_body", "load_motion", "load_garment", "save_garment", "pose", "template", "deform", "classify", "read_outfit", "reconstruct", "reconstruct_outfit")})
-__all__ = ["DartsInputError", "__version__", *_API]
+__getattr__, __dir__, __all__ = _lazy_exports(__name__, {name: "api" for name in (
+    "load_body", "load_motion", "load_garment", "save_garment", "pose", "template", "deform", "classify", "read_outfit",
+    "reconstruct", "reconstruct_outfit")}, subpackages=("body", "motion", "templates", "dart", "crdl", "regress"),
+    eager=("DartsInputError", "__version__"))

@@ -3,7 +3,7 @@
 ``sim.simulate(garment, motion, ...)`` is the library entry point (``sim.api``); names load on first
 use, so ``import sim`` costs nothing until one is asked for.
 """
-from darts.lazy import lazy_exports
+from darts.lazy import lazy_exports as _lazy_exports
 
-__getattr__, __all__ = lazy_exports(__name__, {
+__getattr__, __dir__, __all__ = _lazy_exports(__name__, {
     "simulate": "api", "run_job": "api", "SimJob": "api", "Simulated": "api", "SimSettings": "settings"})

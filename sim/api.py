@@ -18,7 +18,6 @@ import numpy as np
 
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
-from darts.shipped import resolve_garment, resolve_motion
 from exporters.sequence import SEQUENCE_FORMATS
 from exporters.usd import USD_SUFFIXES
 from sim.settings import SimSettings
@@ -34,8 +33,8 @@ class SimJob:
     an outfit, inner layer first) on the body posed by ``motion`` (a ``Motion``, an AMASS ``.npz``
     or a shipped name), and where its results go.
 
-    ``start``/``end``/``frames`` count motion frames at ``settings.fps``; ``body`` is an SMPL-format
-    file (default: the bundled body); ``betas`` the shape simulated on (default: the DART's own);
+    ``start``/``end``/``frames`` count motion frames at ``settings.fps``; ``body`` is a ``BodyModel`` or
+    an SMPL-format file (default: the bundled body); ``betas`` the shape simulated on (default: the DART's own);
     ``material`` replaces every garment's; ``seams`` are ``NAME=REGIME[:STIFFNESS]`` settings (in an
     outfit NAME applies to every garment with that seam, ``GARMENT/NAME`` to one).
     ``output``: a USD file (.usd/.usda/.usdc) or a folder of OBJ/PLY frames (``format``); ``stats``:
@@ -50,7 +49,7 @@ class SimJob:
     end: int | None = None
     frames: int | None = None
     settle: float = 0.5
-    body: str | None = None
+    body: object = None  # a BodyModel, an SMPL-format file, or None: the bundled body
     betas: Sequence[float] | None = None
     material: str | None = None
     seams: Sequence[str] = ()
@@ -97,7 +96,7 @@ class SimJob:
             check_preview(self.preview)
 
     def to_dict(self) -> dict:
-        """The job as JSON-able values (garment and motion given as names or paths)."""
+        """The job as JSON-able values (garment, motion and body given as names or paths)."""
         values = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "settings"}
         if isinstance(self.garment, (list, tuple)):
             values["garment"] = [str(g) for g in self.garment]
@@ -190,7 +189,7 @@ class _Dressing:
 
 
 def _load_garments(job: SimJob) -> _Dressing:
-    from darts.dart.io import load_dart
+    from darts.api import load_garment
     from darts.dart.model import MATERIALS, Dart, parse_seam_setting
     from darts.outfit_folder import outfit_garments
     from sim.outfit import garment_names
@@ -202,7 +201,7 @@ def _load_garments(job: SimJob) -> _Dressing:
     if not given:
         raise DartsInputError(None, "no garment given")
     # A shallow copy is enough: material and seams are replaced below, never changed in place.
-    darts = [replace(g) if isinstance(g, Dart) else load_dart(resolve_garment(g)) for g in given]
+    darts = [replace(g) if isinstance(g, Dart) else load_garment(g) for g in given]
     labels = [g.category if isinstance(g, Dart) else Path(str(g)).stem for g in given]
     names = garment_names(labels) if len(darts) > 1 else ["garment"]
     for dart in darts:
@@ -222,12 +221,9 @@ def _load_garments(job: SimJob) -> _Dressing:
 
 
 def _load_motion(job: SimJob):
-    from darts.motion.amass import Motion, load_motion
-    from darts.motion.resample import resample
+    from darts.api import load_motion
 
-    motion = job.motion if isinstance(job.motion, Motion) else load_motion(resolve_motion(job.motion))
-    fps = job.settings.fps
-    motion = resample(motion, fps) if abs(motion.fps - fps) > 1e-9 else motion
+    motion = load_motion(job.motion, job.settings.fps)
     start, end = _frame_range(job, motion.num_frames)
     return motion.with_frames(trans=motion.trans[start:end], **{name: arr[start:end] for name, arr in motion.parts().items()})
 
@@ -316,7 +312,7 @@ def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Si
     """Check every input and output of ``job``, simulate, write its output, stats and preview."""
     from contextlib import nullcontext
 
-    from darts.body.io import load_body
+    from darts.api import load_body
     from sim.body_track import build_body_track
     from sim.run import simulate as run_frames
     from sim.run import summary

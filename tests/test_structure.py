@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).parents[1]
 PACKAGES = ("darts", "sim", "exporters", "scenes")
 
@@ -86,3 +88,17 @@ def test_help_and_body_info_load_no_heavy_module():
                  "import darts, sim"):
         loaded = _loaded_after(code)
         assert not loaded & HEAVY, f"{code!r} loaded {sorted(loaded & HEAVY)}"
+
+
+@pytest.mark.parametrize("package", ["darts", "sim", "darts.body", "darts.motion"])
+def test_the_api_shows_itself(package):
+    """dir() and tab completion list every public name (lazily loaded ones too), each resolves, and
+    no helper of the package's own (the lazy loader, its imports) is among them."""
+    from importlib import import_module
+
+    module = import_module(package)
+    public = [name for name in dir(module) if not name.startswith("_")]
+    assert set(module.__all__) - {"__version__"} <= set(public)
+    for name in public:
+        assert getattr(module, name) is not None
+    assert not {"lazy", "lazy_exports", "errors", "import_module"} & set(public)
