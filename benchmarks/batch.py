@@ -46,7 +46,8 @@ def main() -> None:
         ray_s = time.perf_counter() - started
     failed = [row["id"] for row in serial + parallel if row["status"] != "ok"]
     result = {
-        "jobs": len(jobs), "frames_per_job": args.frames, "materials": args.materials, "workers": args.workers, "cores": os.cpu_count(),
+        "jobs": len(jobs), "frames_per_job": args.frames, "materials": args.materials, "workers": args.workers,
+        "cores": os.cpu_count(),
         "serial_seconds": round(serial_s, 2), "ray_seconds": round(ray_s, 2),
         "serial_jobs_per_hour": round(3600 * len(jobs) / serial_s, 1), "ray_jobs_per_hour": round(3600 * len(jobs) / ray_s, 1),
         "speedup": round(serial_s / ray_s, 3), "failed": failed,

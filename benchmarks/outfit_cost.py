@@ -69,7 +69,8 @@ def main() -> None:
     rows = {}
     for name in names:
         row = rows[name] = measure(outfits[name], args.frames)
-        print(f"{name}: outfit {row['cpu_s']['outfit']:.1f} s CPU, alone {sum(v for k, v in row['cpu_s'].items() if k != 'outfit'):.1f} s "
+        alone = sum(v for k, v in row['cpu_s'].items() if k != 'outfit')
+        print(f"{name}: outfit {row['cpu_s']['outfit']:.1f} s CPU, alone {alone:.1f} s "
               f"-> {row['ratio_outfit_to_sum_alone']:.2f}x; inside {row['layer_inside_last_frame']}", flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(rows, indent=1))

@@ -49,14 +49,16 @@ SCENES = ("short-sleeve-top:walk", "short-skirt:walk", "short-skirt:squat", "lon
 ISSUE_30_DEFAULT = dict(solver="xpbd", substeps=20, iterations=2, self_contact_interval=2, self_contact_reach=0.01,
                         self_contact_list_reach=0.0, replay_launches=False)
 CONFIGURATIONS = {
-    "issue 30's default: xpbd 20x2, tethers, 5 mm skin, self-contact searched every 2 substeps within 1 cm, launches from Python": ISSUE_30_DEFAULT,
+    ("issue 30's default: xpbd 20x2, tethers, 5 mm skin, self-contact searched every 2 substeps within 1 cm, "
+     "launches from Python"): ISSUE_30_DEFAULT,
     "self-contact searched every 2 substeps within 2 mm + travel, broad phase every 10 substeps": dict(self_contact_interval=2),
     "the same with bending every 2 substeps": dict(self_contact_interval=2, bending_interval=2),
     "the default with every launch from Python": dict(replay_launches=False),
     "default: searched every 4 substeps within 2 mm + travel, broad phase every 10 substeps, launches replayed": {},
     # A lead, not the default (issue 30): small steps, 25 x 1 (better seams and penetration, more strain),
     # with the surface tethers trimmed by 1 % (less strain); self-contact searched as often in time.
-    "small steps: xpbd 25x1, bending and body search every 2 substeps, self-contact every 5, broad phase every 12, tethers x 0.99":
+    ("small steps: xpbd 25x1, bending and body search every 2 substeps, self-contact every 5, broad phase every 12, "
+     "tethers x 0.99"):
         dict(substeps=25, iterations=1, bending_interval=2, contact_interval=2, self_contact_interval=5,
              self_contact_broad_interval=12, tether_scale=0.99),
 }
@@ -126,7 +128,8 @@ class Trial:
     def row(self) -> dict:
         settings = self.settings
         row = {"settings": {k: getattr(settings, k) for k in ("solver", "substeps", "iterations", "contact_skin",
-                                                              "tethers", "tether_scale", "bending_interval", "self_contact_interval", "replay_launches",
+                                                              "tethers", "tether_scale", "bending_interval",
+                                                              "self_contact_interval", "replay_launches",
                                                               "contact_interval",
                                                               "self_contact_broad_interval", "self_contact_list_reach",
                                                               "self_contact_reach")},
@@ -180,7 +183,8 @@ def main() -> None:
     parser.add_argument("--scenes", nargs="+", default=list(SCENES), metavar="GARMENT:MOTION",
                         help=f"shipped garment and motion names or files (default: {' '.join(SCENES)})")
     parser.add_argument("--frames", type=int, default=None,
-                        help="recorded frames after the settle (default: 30 for the first scene, the whole motion for the others)")
+                        help="recorded frames after the settle "
+                             "(default: 30 for the first scene, the whole motion for the others)")
     parser.add_argument("--configurations", nargs="+", default=list(CONFIGURATIONS), choices=list(CONFIGURATIONS),
                         metavar="NAME", help="which rows (default: all; the first is the baseline)")
     parser.add_argument("--profile", action="store_true", help="profile the last configuration (a copy of it, run alongside)")
@@ -201,7 +205,8 @@ def main() -> None:
                           args.profile, args.perturbed)
         for name, row in results.items():
             print(scene, name, json.dumps(row), flush=True)
-        document["scenes"].append({"garment": garment, "motion": motion, "frames": min(frames, len(track.vertices) - track.settle_frames - 1),
+        document["scenes"].append({"garment": garment, "motion": motion,
+                                   "frames": min(frames, len(track.vertices) - track.settle_frames - 1),
                                    "particles": len(model.rest), "results": results})
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(document, indent=1))  # after every scene: a long run keeps what it has

@@ -61,7 +61,8 @@ def costliest_imports(module_args: list[str], count: int = 5) -> list[tuple[str,
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--baseline", default="9c35e5c", help="git revision to compare with (default: before issue 31's lazy imports)")
+    parser.add_argument("--baseline", default="9c35e5c",
+                        help="git revision to compare with (default: before issue 31's lazy imports)")
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--out", type=Path, default=Path("docs/data/benchmark_startup.json"))
     args = parser.parse_args()

@@ -9,7 +9,7 @@ body model), ``darts.motion`` (AMASS-format motions), ``darts.templates``, ``dar
 +X (SMPL); the world frame of posed bodies and motions is AMASS's Z up. Units are metres, seconds,
 kilograms.
 """
-from darts.errors import DartsInputError
+from darts.errors import DartsInputError as DartsInputError  # re-exported (__all__ is built below)
 from darts.lazy import lazy_exports as _lazy_exports
 
 __version__ = "0.1.0"

@@ -10,9 +10,9 @@ Every function takes a path, a shipped name or the object itself, validates it o
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -264,7 +264,8 @@ def _picture_mask(mask, picture: np.ndarray):
 
     if mask is None or isinstance(mask, np.ndarray):
         if mask is not None and mask.shape != picture.shape[:2]:
-            raise DartsInputError(None, f"the mask is {mask.shape[1]}x{mask.shape[0]}, the image {picture.shape[1]}x{picture.shape[0]}")
+            raise DartsInputError(None,
+                                  f"the mask is {mask.shape[1]}x{mask.shape[0]}, the image {picture.shape[1]}x{picture.shape[0]}")
         return None if mask is None else np.asarray(mask, bool)
     return read_mask(mask, picture.shape[1], picture.shape[0], "the image")
 
@@ -278,7 +279,8 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     ``silhouette_weight`` (default: the term's, ``darts.crdl.SILHOUETTE_WEIGHTS``), when ``mask`` is given).
     ``camera``: a ``Camera`` or camera.json (default: the dataset's camera of the category). Returns
     a ``Reconstruction``: ``.dart``, ``.report`` (category, probabilities, lines, CRDL numbers,
-    seconds per stage) and ``.mask`` (the garment mask the silhouette term used). A picture too small, blurred or blank, or whose garment the classifier is not
+    seconds per stage) and ``.mask`` (the garment mask the silhouette term used). A picture too
+    small, blurred or blank, or whose garment the classifier is not
     sure of, or given alone (no mask, no camera) without a person in it (``darts.photo``; these two
     unless ``accept_low_confidence``), raises ``DartsInputError`` (``darts.regress.checks``). A
     photograph given alone is parsed into every garment it shows (``darts.photo.outfit``): ``garment``

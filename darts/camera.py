@@ -50,7 +50,7 @@ class Camera:
     translation: np.ndarray
 
     @classmethod
-    def from_json(cls, path: str | os.PathLike) -> "Camera":
+    def from_json(cls, path: str | os.PathLike) -> Camera:
         """Read and check ``camera.json`` (see the module docstring)."""
         from darts.fileio import read_input
 
@@ -62,7 +62,7 @@ class Camera:
         return cls.from_dict(data, path)
 
     @classmethod
-    def from_dict(cls, data, source=None) -> "Camera":
+    def from_dict(cls, data, source=None) -> Camera:
         """A camera from its JSON object, checked (``source`` names it in errors)."""
         missing = [key for key in KEYS if not isinstance(data, dict) or key not in data]
         if missing:
@@ -74,7 +74,8 @@ class Camera:
         except (TypeError, ValueError):
             raise DartsInputError(source, "camera values must be numbers") from None
         if rotation.shape != (3, 3) or translation.shape != (3,):
-            raise DartsInputError(source, f"rotation must be [3,3] and translation [3], got {rotation.shape} and {translation.shape}")
+            raise DartsInputError(source,
+                                  f"rotation must be [3,3] and translation [3], got {rotation.shape} and {translation.shape}")
         if not (np.isfinite(rotation).all() and np.isfinite(translation).all() and np.isfinite(numbers).all()):
             raise DartsInputError(source, "camera values must be finite")
         if not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-4) or np.linalg.det(rotation) < 0:
@@ -86,7 +87,7 @@ class Camera:
         return cls(int(width), int(height), fx, fy, cx, cy, rotation, translation)
 
     @classmethod
-    def look_at(cls, eye, target, width: int, height: int, focal: float, up=(0.0, 1.0, 0.0)) -> "Camera":
+    def look_at(cls, eye, target, width: int, height: int, focal: float, up=(0.0, 1.0, 0.0)) -> Camera:
         """A camera at ``eye`` looking at ``target`` (canonical frame) with ``up`` pointing up in the
         image, focal length ``focal`` pixels and the principal point at the image centre."""
         eye, target, up = (np.asarray(a, np.float64) for a in (eye, target, up))
@@ -98,7 +99,7 @@ class Camera:
         rotation = np.stack([right, down, forward])  # rows: camera x, y, z in canonical coordinates
         return cls(int(width), int(height), float(focal), float(focal), width / 2.0, height / 2.0, rotation, -rotation @ eye)
 
-    def resized(self, width: int, height: int) -> "Camera":
+    def resized(self, width: int, height: int) -> Camera:
         """The same view at ``width`` x ``height`` pixels (intrinsics scaled per axis)."""
         sx, sy = width / self.width, height / self.height
         return replace(self, width=width, height=height, fx=self.fx * sx, fy=self.fy * sy, cx=self.cx * sx,
@@ -111,7 +112,7 @@ class Camera:
                               "pixel (u, v) = (fx x_c/z_c + cx, fy y_c/z_c + cy), pixel centres at +0.5"}
 
     @classmethod
-    def default(cls, category: str, size: int = IMAGE_SIZE) -> "Camera":
+    def default(cls, category: str, size: int = IMAGE_SIZE) -> Camera:
         """The camera a picture of ``category`` is assumed to come from: level, from the front (+Z),
         DISTANCE from the category's frame centre, the frame filling 1 / MARGIN of the image."""
         centre, extent = FRAMES[category]
@@ -133,7 +134,8 @@ class Camera:
             return np.stack([self.fx * camera[:, 0] / safe + self.cx, self.fy * camera[:, 1] / safe + self.cy], 1), depth
         import torch
 
-        camera = points @ torch.as_tensor(self.rotation, dtype=points.dtype).T + torch.as_tensor(self.translation, dtype=points.dtype)
+        rotation = torch.as_tensor(self.rotation, dtype=points.dtype)
+        camera = points @ rotation.T + torch.as_tensor(self.translation, dtype=points.dtype)
         depth = camera[:, 2]
         safe = torch.where(depth > 1e-6, depth, torch.ones_like(depth))
         return torch.stack([self.fx * camera[:, 0] / safe + self.cx, self.fy * camera[:, 1] / safe + self.cy], 1), depth

@@ -28,9 +28,9 @@ import socket
 import time
 import traceback
 import uuid
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterable
 
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output

@@ -3,7 +3,8 @@
     python scripts/check_blender_import.py OUT.usd [OUT2.usda ...]
 
 For each file: import it, then compare the garment's evaluated vertices in Blender with the USD
-points at the first, middle and last time codes (which must differ: the animation plays) (Blender and the file are both Z up, metres).
+points at the first, middle and last time codes (which must differ: the animation plays) (Blender
+and the file are both Z up, metres).
 Exits non-zero on any mismatch.
 """
 from __future__ import annotations

@@ -23,8 +23,8 @@ from darts.crdl.deform import fit_surface, handle_targets, weld_garment
 from darts.crdl.layer import Crdl
 from darts.crdl.targets import edit_targets, parse_edit
 from darts.dart.io import load_dart
-from darts.templates.defaults import DEFAULT_EASE
 from darts.shipped import resolve_garment, shipped_garments
+from darts.templates.defaults import DEFAULT_EASE
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "data" / "crdl_comparison.json"

@@ -22,7 +22,8 @@ Measures per picture (256 x 256 pixels):
 With ``--reconstruct`` (on every ``--every``-th picture), ``darts.regress.pipeline.reconstruct``
 twice with no camera: "oracle", given the true category and the garment's true mask, and "photo",
 given nothing but the picture: the parsing's garment of the picture's kind (upper, lower, dress:
-the one of ``-o OUT_DIR``'s garments that the truth is about), its mask and category (its lengths measured, not applied: the default). Each against the
+the one of ``-o OUT_DIR``'s garments that the truth is about), its mask and category (its lengths
+measured, not applied: the default). Each against the
 template of its category on the same fitted body without the CRDL:
 - **garment IoU**: the garment posed by the fitted body (``darts.crdl.posed.Posing``) and rendered through the
   fitted camera, the fitted body in front of it, against the true mask;
@@ -57,10 +58,10 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
     from darts.dart.io import load_dart
     from darts.errors import DartsInputError
     from darts.geometry.distance import SurfaceDistance
+    from darts.geometry.loops import feature_lines
     from darts.raycast import cast
     from darts.regress.pipeline import reconstruct
     from darts.templates.defaults import DATASET_EDGE_LENGTH
-    from darts.geometry.loops import feature_lines
 
     start = time.process_time()
     try:
@@ -77,7 +78,8 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
     posed_camera = Camera.from_dict(fit["posed_camera"])
     model = body.to(torch.float64)
     fitted_body = model(torch.tensor(pose)[None], torch.tensor(betas)[None]).vertices[0].numpy()
-    truth = load_dart(Path(folder).parent.parent / json.loads((folder / "meta.json").read_text())["garment_folder"] / "garment.npz")
+    garment_folder = json.loads((folder / "meta.json").read_text())["garment_folder"]
+    truth = load_dart(Path(folder).parent.parent / garment_folder / "garment.npz")
     truth_vertices = np.asarray(truth.vertices, np.float64)
 
     def lines_of(dart) -> dict[str, np.ndarray]:
@@ -226,7 +228,8 @@ def main() -> None:
                              "refused": sum(f"{kind}_refused" in r for r in rows),
                              **{f"{k}_median": float(np.median([r[f"{kind}_{k}"] for r in posed]))
                                 for k in ("garment_iou", "template_iou")},
-                             **{f"{k}_median_category_right": float(np.median([r[f"{kind}_{k}"] for r in right])) if right else None
+                             **{f"{k}_median_category_right":
+                                float(np.median([r[f"{kind}_{k}"] for r in right])) if right else None
                                 for k in ("surface_chamfer_cm", "template_chamfer_cm", "line_chamfer_cm",
                                           "template_line_chamfer_cm")},
                              "garment_iou_better": int(sum(r[f"{kind}_garment_iou"] > r[f"{kind}_template_iou"] for r in posed))}

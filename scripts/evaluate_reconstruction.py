@@ -162,7 +162,8 @@ def tables(result: dict) -> str:
         mean = lambda f: np.mean([f(r) for r in rows])  # noqa: E731
         out += ["| end to end | surface Chamfer (cm) | mask IoU |", "|---|---|---|"]
         for key, label in (("template", "undeformed template"), ("ours", "reconstructed")):
-            out.append(f"| {label} | {mean(lambda r: r[key]['surface_chamfer_cm']):.2f} | {mean(lambda r: r[key]['mask_iou']):.3f} |")
+            chamfer = mean(lambda r, key=key: r[key]["surface_chamfer_cm"])
+            out.append(f"| {label} | {chamfer:.2f} | {mean(lambda r, key=key: r[key]['mask_iou']):.3f} |")
         out.append(f"\n{len(rows)} pictures; classified right {sum(r['predicted'] == r['category'] for r in rows)}; "
                    f"darts-sim stable {sum(r['sim']['stable'] for r in rows)}, max penetration "
                    f"{100 * max(r['sim']['max_penetration'] for r in rows):.2f} %")

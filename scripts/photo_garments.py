@@ -37,8 +37,8 @@ def main() -> None:
     from darts.crdl.deform import weld_garment
     from darts.crdl.posed import Posing
     from darts.photo.synthetic import posed_body, render_person
-    from darts.regress.pipeline import reconstruct_outfit
     from darts.raycast import cast
+    from darts.regress.pipeline import reconstruct_outfit
     from darts.render import FRONT, draw_mesh
 
     torch.set_num_threads(1)

@@ -8,7 +8,8 @@ its category, probability and the attributes measured (sleeve end, hem end as s 
 0 shoulder or hip, 0.5 elbow or knee, 1 wrist or ankle; the fill between the legs; one piece or
 two), against the labelled garments; a photograph counts as right when the categories read are
 exactly the labelled ones. CPU seconds (``time.process_time``) per photograph, one core, after a
-first photograph has loaded the models. Prints a Markdown table (docs/reconstruction.md).
+first photograph has loaded the models. Rewrites its table in docs/reconstruction.md
+(``scripts/docs_tables.py``).
 """
 from __future__ import annotations
 
@@ -45,17 +46,10 @@ def main() -> None:
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps({"command": "python scripts/photo_outfits.py", "summary": summary, "rows": rows},
                                     indent=1) + "\n")
-    print("| photograph | truth | read (probability) | sleeve end | hem end | between legs | right |")
-    print("|---|---|---|---|---|---|---|")
-    for r in rows:
-        read = ", ".join(f"{g['category']} ({100 * g['probability']:.0f} %)" for g in reversed(r["read"]))
-        attributes = {}
-        for g in r["read"]:
-            attributes.update({k: v for k, v in g["attributes"].items() if isinstance(v, (int, float)) and v is not None})
-        cells = [attributes.get(k) for k in ("sleeve_end", "hem_end", "between_legs_fill")]
-        cells = ["–" if c is None else f"{c:.2f}" for c in cells]
-        truth = ", ".join(r["truth"]) + (" (ambiguous)" if r["ambiguous"] else "")
-        print(f"| {r['file']} | {truth} | {read} | {' | '.join(cells)} | {'yes' if r['right'] else 'no'} |")
+    from docs_tables import rendered  # scripts/docs_tables.py, beside this script
+
+    path, _, text = rendered("photo-outfits")
+    path.write_text(text)
     print(json.dumps(summary))
 
 

@@ -15,10 +15,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from darts.body.io import load_body  # noqa: E402
-from darts.render import WORLD_FRONT_LEFT, draw_mesh  # noqa: E402
 from darts.body.segmentation import PART_NAMES, body_segmentation  # noqa: E402
 from darts.motion.amass import load_motion  # noqa: E402
 from darts.motion.posing import pose_sequence  # noqa: E402
+from darts.render import WORLD_FRONT_LEFT, draw_mesh  # noqa: E402
 from scenes import MOTIONS_DIR  # noqa: E402
 
 
@@ -104,7 +104,7 @@ def simulation_figure(out: Path, scenes: list[tuple[str, str]], times: list[floa
         wanted = {int(round(t * 30.0)): col for col, t in enumerate(times)}
         frames: list = []
 
-        def keep(garment_points, body_points):
+        def keep(garment_points, body_points, frames=frames, wanted=wanted):
             frames.append((garment_points, body_points) if len(frames) in wanted else None)
 
         simulate(dart, track, SimSettings(), keep)
@@ -144,7 +144,8 @@ def dataset_figure(out: Path, root: Path) -> None:
     for row, category in enumerate(CATEGORIES):
         mine = [f for f in samples if json.loads((f / "meta.json").read_text())["category"] == category][:2]
         mask = np.asarray(Image.open(mine[0] / "mask.png"))
-        panels = [picture(mine[0]), np.stack([mask] * 3, -1), picture(mine[1]), picture(root / "test_unseen" / mine[0].name, False)]
+        panels = [picture(mine[0]), np.stack([mask] * 3, -1), picture(mine[1]),
+                  picture(root / "test_unseen" / mine[0].name, False)]
         for col, panel in enumerate(panels):
             axes[row, col].imshow(panel)
             axes[row, col].axis("off")

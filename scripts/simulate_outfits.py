@@ -42,7 +42,8 @@ def run_one(job: tuple[str, str, str]) -> dict:
     s = run.stats
     row = {"outfit": name, "garments": OUTFITS[name], "motion": motion, "stable": s["stable"], "message": s["message"],
            "frames": len(s["frames"]), "particles": s["particles"], "sim_fps": s["sim_fps"],
-           "max_layer_inside": s.get("max_layer_inside"), "max_layer_inside_closed": s.get("max_layer_inside_closed"), "max_layer_crossings": s.get("max_layer_crossings"), "max_penetration": s["max_penetration"],
+           "max_layer_inside": s.get("max_layer_inside"), "max_layer_inside_closed": s.get("max_layer_inside_closed"),
+           "max_layer_crossings": s.get("max_layer_crossings"), "max_penetration": s["max_penetration"],
            "max_penetration_winding": s["max_penetration_winding"], "max_crossings": s["max_self_intersections"],
            "garment_stats": s.get("garments"), "max_waist_slide": s["max_waist_slide"]}
     out.write_text(json.dumps(row, indent=1))

@@ -83,7 +83,8 @@ def markdown(rows: list[dict]) -> str:
         partial = runs[-1]
         lines.append(f"| {garment} | " + " | ".join(f"{1e3 * r['max_gap']:.2f}" for r in runs[:4])
                      + f" | {1e3 * partial['max_gap']:.2f} / {1e3 * (partial['open_mean'] or 0):.1f}"
-                     + f" | {100 * max(r['max_penetration'] for r in runs):.2f} % | {'yes' if all(r['stable'] for r in runs) else 'no'} |")
+                     + f" | {100 * max(r['max_penetration'] for r in runs):.2f} % "
+                     + f"| {'yes' if all(r['stable'] for r in runs) else 'no'} |")
     return "\n".join(lines)
 
 

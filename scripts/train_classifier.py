@@ -13,8 +13,8 @@ import sys
 
 import torch
 
-from darts.regress.data import load_split
 from darts.checkpoint import save_checkpoint
+from darts.regress.data import load_split
 from darts.regress.train import dataset_record, train_classifier, training_parser
 
 

@@ -63,9 +63,9 @@ def mask_iou(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
 
 
 def main() -> None:
+    from darts.checkpoint import save_checkpoint
     from darts.photo.garment_net import GarmentNet
     from darts.regress.data import CATEGORY_IDS
-    from darts.checkpoint import save_checkpoint
     from darts.regress.train import training_parser
 
     args = training_parser(__doc__.splitlines()[0], 15, "darts/photo/weights/garment_net.pt").parse_args()
@@ -120,7 +120,8 @@ def main() -> None:
         print(json.dumps(history[-1]), flush=True)
         if best is None or iou > best["val_mask_iou"]:
             best = history[-1]
-            record = {"command": f"python scripts/train_garment_net.py --data {args.data} --epochs {args.epochs} --seed {args.seed}",
+            command = f"python scripts/train_garment_net.py --data {args.data} --epochs {args.epochs} --seed {args.seed}"
+            record = {"command": command,
                       "data": json.loads((args.data / "summary.json").read_text())["command"],
                       "train_pictures": len(train_index), "val_pictures": len(val_index), "seed": args.seed,
                       "categories": list(CATEGORY_IDS), "best": best, "history": history}

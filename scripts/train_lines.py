@@ -21,10 +21,10 @@ from pathlib import Path
 
 import torch
 
-from darts.regress.data import load_split
-from darts.regress.posed_lines import load_posed_split
-from darts.regress.lines import VARIANTS
 from darts.checkpoint import save_checkpoint
+from darts.regress.data import load_split
+from darts.regress.lines import VARIANTS
+from darts.regress.posed_lines import load_posed_split
 from darts.regress.train import dataset_record, load_checkpoint, train_regressor, training_parser
 
 

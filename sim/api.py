@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -106,7 +106,7 @@ class SimJob:
                 "settings": asdict(self.settings)}
 
     @classmethod
-    def from_dict(cls, values: dict) -> "SimJob":
+    def from_dict(cls, values: dict) -> SimJob:
         """The inverse of ``to_dict``."""
         values = dict(values)
         settings = dict(values.pop("settings", {}))
@@ -336,7 +336,8 @@ def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Si
     try:
         with (_writer(job, dressing, track) if job.output is not None else nullcontext()) as writer:
             frames.writer = writer
-            result = run_frames(garments, track, settings, frames, progress=progress, winding=job.winding if job.winding is not None else job.stats is not None)
+            result = run_frames(garments, track, settings, frames, progress=progress,
+                                winding=job.winding if job.winding is not None else job.stats is not None)
             if not result.frames:
                 raise _NothingToKeep(result)
     except _NothingToKeep as nothing:

@@ -132,7 +132,8 @@ def command_line(job) -> str:
     options = [("--start", job.start, 0), ("--end", job.end, None), ("--frames", job.frames, None),
                ("--settle", job.settle, 0.5), ("--body", job.body, None), ("--material", job.material, None),
                ("--format", job.format, "obj"), ("--stats", job.stats, None), ("--preview", job.preview, None)]
-    argv += [item for flag, value, default in options if value != default for item in (flag, f"{value:g}" if isinstance(value, float) else str(value))]
+    argv += [item for flag, value, default in options if value != default
+             for item in (flag, f"{value:g}" if isinstance(value, float) else str(value))]
     if job.betas:
         argv += ["--betas", *(f"{b:g}" for b in job.betas)]
     for setting in job.seams:
@@ -156,7 +157,8 @@ def _main(argv: list[str] | None) -> int:
 def _print_summary(stats: dict, output: str | None) -> None:
     gaps = ", ".join(f"{name} {gap * 1e3:.2f}" for name, gap in stats["max_seam_gap"].items())
     settle = stats["simulated_frames"] - len(stats["frames"])
-    print(f"{len(stats['frames'])} frames recorded after {settle} settle frames, {stats['particles']} particles, {stats['solver']} "
+    print(f"{len(stats['frames'])} frames recorded after {settle} settle frames, {stats['particles']} particles, "
+          f"{stats['solver']} "
           f"{stats['substeps']} substeps x {stats['iterations']} iterations at {stats['fps']:g} fps")
     print(f"wall {stats['wall_seconds']:.1f} s, {stats['sim_fps']:.2f} simulated frames/s, "
           f"max penetration {100 * stats['max_penetration']:.2f} % of vertices, max speed {stats['max_speed']:.2f} m/s")

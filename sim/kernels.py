@@ -312,7 +312,8 @@ def apply_friction(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3),
 @wp.kernel
 def solve_distances(offset: int, pairs: wp.array2d(dtype=wp.int32), rest: wp.array(dtype=float),
                     compliance: wp.array(dtype=float), anchors: wp.array2d(dtype=wp.int32),
-                    inverse_mass: wp.array(dtype=float), dt: float, multiplier: wp.array(dtype=float), x: wp.array(dtype=wp.vec3)):
+                    inverse_mass: wp.array(dtype=float), dt: float, multiplier: wp.array(dtype=float),
+                    x: wp.array(dtype=wp.vec3)):
     """XPBD distance constraint C = |x_a - x_b| - L with compliance 1/k.
 
     When the ends coincide and L > 0 (a repulsive seam), they separate along their anchors: each end

@@ -89,7 +89,8 @@ def _join(models: list[ClothModel], names: list[str]) -> ClothModel:
         spring_stiffness=cat("spring_stiffness", False),
         spring_seam=np.concatenate([m.spring_seam + seam_offsets[k] for k, m in enumerate(models)]),
         spring_anchors=anchors.reshape(-1, 2), edge_stiffness=cat("edge_stiffness", False),
-        hinge_bend=cat("hinge_bend", False), body_offset=cat("body_offset", False), layer=np.concatenate([np.full(len(m.rest), k) for k, m in enumerate(models)]),
+        hinge_bend=cat("hinge_bend", False), body_offset=cat("body_offset", False),
+        layer=np.concatenate([np.full(len(m.rest), k) for k, m in enumerate(models)]),
         seam_names=[f"{names[k]}/{s}" for k, m in enumerate(models) for s in m.seam_names], material=material,
         loops={f"{names[k]}/{line}": loop + offsets[k] for k, m in enumerate(models) for line, loop in m.loops.items()},
     )
@@ -225,7 +226,8 @@ def layer_order(outfit: Outfit, particles: np.ndarray, body_vertices: np.ndarray
     garment's particles under the inner garment's cloth, and the fraction inside its closed surface.
 
     Inside: the winding number (> 1/2) of the inner garment closed by its caps (``closed_surface``;
-    open, a sleeve passing an armhole would count as inside it). Under the cloth: inside, and the inner garment's cloth lies over the particle: the
+    open, a sleeve passing an armhole would count as inside it). Under the cloth: inside, and the
+    inner garment's cloth lies over the particle: the
     segment of ``COVER`` from it along the body's outward normal at its closest body point passes
     through an inner triangle. A particle inside but not under the cloth lies in an opening that the
     body fills, on the skin (the top's underarm in a sleeveless dress's armhole, pressed into the

@@ -10,8 +10,8 @@ cloth, and inside its closed surface).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 

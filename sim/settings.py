@@ -62,7 +62,9 @@ class SimSettings:
         """Raise ValueError naming the first setting out of range (the solver's name is the
         registry's to check: ``sim.solvers.solver_class``)."""
         finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
-                                               self.damping, self.contact_reach, self.self_contact_reach, self.self_contact_list_reach, self.contact_skin, self.tether_scale, self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
+                                               self.damping, self.contact_reach, self.self_contact_reach,
+                                               self.self_contact_list_reach, self.contact_skin, self.tether_scale,
+                                               self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
         if not finite:
             raise ValueError("settings must be finite numbers")
         rules = [

@@ -35,7 +35,7 @@ class ClothState:
         self.x = vec3_array(positions, device)
         self.v = wp.zeros_like(self.x)
 
-    def assign(self, other: "ClothState") -> None:
+    def assign(self, other: ClothState) -> None:
         """Copy ``other``'s positions and velocities into this state."""
         wp.copy(self.x, other.x)
         wp.copy(self.v, other.v)

@@ -22,6 +22,7 @@ def _example() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
+@pytest.mark.slow
 def test_the_documented_example_runs_as_written(capsys):
     namespace: dict = {}
     exec(compile(_example(), str(DOC), "exec"), namespace)

@@ -272,6 +272,7 @@ def _wait_for_frames(run, frames: int, deadline=120) -> str:
     return seen
 
 
+@pytest.mark.slow
 def test_interrupted_and_killed_runs_leave_nothing_half_written(tmp_path):
     out = tmp_path / "out.usdc"
     run = _darts_sim(SKIRT, SQUAT, "-o", out, "--frames", "60")

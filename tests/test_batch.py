@@ -67,6 +67,7 @@ def test_an_outfit_is_one_job_of_its_garments(tmp_path):
         load_jobs(spec)
 
 
+@pytest.mark.slow
 def test_killed_batch_resumes_without_redoing_finished_jobs(coarse_garments, tmp_path):
     spec = _spec(tmp_path, [str(coarse_garments / "short-skirt.npz"), str(coarse_garments / "sleeveless-top.npz")], 12)
     out = tmp_path / "out"
@@ -100,6 +101,7 @@ def test_killed_batch_resumes_without_redoing_finished_jobs(coarse_garments, tmp
     assert row["stable"] and row["max_penetration"] <= 0.01 and row["sim_fps"] > 0
 
 
+@pytest.mark.slow
 def test_a_broken_garment_fails_its_jobs_only(coarse_garments, tmp_path, run_darts):
     broken = tmp_path / "broken.npz"
     broken.write_bytes(b"PK\x03\x04 this is not a garment")

@@ -121,7 +121,7 @@ def _ride_rising_plate(skin: float, frames: int = 15) -> tuple[np.ndarray, float
         if frame == frames:  # count the queries of the last frame, substep by substep
             collider, original = solver.collider, solver.collider.update
 
-            def counting_update(x, x_start, substep, dt):
+            def counting_update(x, x_start, substep, dt, original=original, collider=collider):
                 original(x, x_start, substep, dt)
                 queried.append(int(np.sum(collider.query_time.numpy() == collider.window_time)))
 

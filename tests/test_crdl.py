@@ -9,10 +9,10 @@ import pytest
 import torch
 import trimesh
 
+from darts.camera import Camera
 from darts.crdl.arap import _rotations_from_covariances, arap_energy, arap_system, best_rotations
 from darts.crdl.deform import deform_dart, fit_surface, handle_targets, weld_garment
 from darts.crdl.layer import Crdl, CrdlWeights
-from darts.camera import Camera
 from darts.crdl.outline import Outline
 from darts.crdl.silhouette import Silhouette
 from darts.crdl.targets import correspond, edit_targets, loop_frame
@@ -118,6 +118,7 @@ def test_local_global_is_differentiable_in_the_targets():
     assert torch.autograd.gradcheck(lambda t: layer.deform(t, iterations=4, tolerance=0.0), (targets,), eps=1e-6, atol=1e-5)
 
 
+@pytest.mark.slow
 def test_local_global_matches_adam_on_a_lengthened_top(body, coarse_top):
     garment = weld_garment(coarse_top)
     targets = edit_targets(coarse_top.category, garment.vertices, garment.lines, [("hem", 0.06), ("sleeve", -0.03)])
@@ -131,6 +132,7 @@ def test_local_global_matches_adam_on_a_lengthened_top(body, coarse_top):
     assert hem == pytest.approx(-0.06, abs=0.01)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shipped", [True, False], ids=["shipped-long-pants", "coarse-long-pants"])
 def test_local_global_goes_on_from_the_better_of_its_two_starts(body, shipped):
     """Legs shortened 10 cm: on the shipped pants the start with the hem snapped to its target turns
@@ -155,6 +157,7 @@ def test_local_global_goes_on_from_the_better_of_its_two_starts(body, shipped):
     assert layer.solve_local_global(points).objective <= 1.01 * value[better]
 
 
+@pytest.mark.slow
 def test_a_lengthened_widened_skirt_stays_outside_the_legs(body, coarse_skirt):
     """The hull term: the skirt goes around both legs, never between them."""
     garment = weld_garment(coarse_skirt)
@@ -176,6 +179,7 @@ def test_a_lengthened_widened_skirt_stays_outside_the_legs(body, coarse_skirt):
     assert max(frame["penetration"] for frame in run.frames) <= 0.01
 
 
+@pytest.mark.slow
 def test_silhouette_term_pulls_the_garment_towards_the_mask(body, coarse_skirt):
     """A mask rendered from a wider skirt: with the silhouette term the result covers more of it."""
     garment = weld_garment(coarse_skirt)
@@ -215,6 +219,7 @@ def _hard_iou(camera, mask, dart) -> float:
     return float((render & mask).sum() / (render | mask).sum())
 
 
+@pytest.mark.slow
 def test_outline_term_pulls_the_garment_over_the_mask(body, coarse_skirt):
     """The outline term against the hard mask of a skirt widened at the hem: the result misses less
     than 0.6 of what the lines alone miss of it (1 - IoU, by a hard render)."""
@@ -288,6 +293,7 @@ def test_darts_deform_rejects_a_mask_of_the_wrong_size(run_darts, tmp_path, coar
     assert code == 2 and "50x40 pixels but the camera is 64x64" in err and not out.exists()
 
 
+@pytest.mark.slow
 def test_posed_term_fits_the_garment_seen_on_a_posed_body(body, coarse_skirt):
     """The skirt widened 8 cm at the hem, posed with the body (turned 29 degrees, the left leg
     forward, the right one back) and seen as a hard mask: the outline term through the pose

@@ -11,11 +11,11 @@ from PIL import Image
 from darts.camera import Camera
 from darts.dart.io import load_dart
 from darts.fileio import read_npz
+from darts.geometry.loops import LINE_POINTS
 from darts.jobs import run_one
 from darts.templates.categories import CATEGORIES
 from sim.dataset.cli import garment_jobs, sample_jobs
 from sim.dataset.make import hidden_by, line_mask_distances, make_garment, render_sample
-from darts.geometry.loops import LINE_POINTS
 from sim.dataset.recipe import EDIT_RANGES, garment_recipe
 
 SAMPLE_FILES = {"image.png", "mask.png", "body_mask.png", "camera.json", "lines.npz", "lines_px.npz", "garment.npz",
@@ -53,6 +53,7 @@ def test_recipes_are_balanced_and_edit_every_line_the_category_has():
     assert garment_recipe(0, 7) == garment_recipe(0, 7) and garment_recipe(0, 7) != garment_recipe(1, 7)
 
 
+@pytest.mark.slow
 def test_sample_lines_land_on_the_garment_mask_boundary(made, body):
     out, rows = made
     for name, samples in rows.items():
@@ -84,6 +85,7 @@ def test_sample_lines_land_on_the_garment_mask_boundary(made, body):
             assert row["line_boundary_median_px"] == pytest.approx(float(np.median(to_boundary)))
 
 
+@pytest.mark.slow
 def test_a_sample_is_made_again_the_same_from_its_seed(made, tmp_path):
     out, rows = made
     again = _make(tmp_path, _first_index("short-pants"))

@@ -33,6 +33,7 @@ def shirt():
     return remeshed_shirt(load_dart(GARMENTS_DIR / "short-sleeve-top.npz"))
 
 
+@pytest.mark.slow
 def test_a_cone_skirt_of_quads_is_recognised_and_registered(tmp_path, run_darts):
     cone_skirt_obj(tmp_path / "cone.obj")
     code, out, err = run_darts("import", tmp_path / "cone.obj", "-o", tmp_path / "g.npz", "--report", tmp_path / "r.json",
@@ -43,9 +44,11 @@ def test_a_cone_skirt_of_quads_is_recognised_and_registered(tmp_path, run_darts)
     _fits(report)
     dart = load_dart(tmp_path / "g.npz")
     assert set(dart.lines) == {"waist", "hem"} and len(dart.seams) > 0 and (tmp_path / "p.png").stat().st_size > 10000
-    assert dart.lines["waist"].size and dart.vertices[dart.lines["waist"]][:, 1].mean() > dart.vertices[dart.lines["hem"]][:, 1].mean()
+    height = {name: dart.vertices[dart.lines[name]][:, 1].mean() for name in ("waist", "hem")}
+    assert dart.lines["waist"].size and height["waist"] > height["hem"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("form", ["obj-cm-y", "usd-cm-z"])
 def test_a_remeshed_stretched_turned_shirt_in_centimetres_is_registered(form, shirt, tmp_path, run_darts):
     vertices, faces = shirt
@@ -73,6 +76,7 @@ def test_a_remeshed_stretched_turned_shirt_in_centimetres_is_registered(form, sh
     assert np.median(np.abs(distance)) < 0.002
 
 
+@pytest.mark.slow
 def test_an_exported_dart_comes_back_where_it_was(tmp_path, run_darts):
     source = GARMENTS_DIR / "short-skirt.npz"
     assert run_darts("export", source, "-o", tmp_path / "s.obj")[0] == 0
@@ -175,6 +179,7 @@ def test_a_non_manifold_mesh_is_refused():
         repair_garment_mesh(vertices, np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]]), "m.obj")
 
 
+@pytest.mark.slow
 def test_an_explicit_transform_replaces_the_alignment(tmp_path, run_darts):
     source = GARMENTS_DIR / "short-skirt.npz"
     assert run_darts("export", source, "-o", tmp_path / "s.obj")[0] == 0

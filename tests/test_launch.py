@@ -63,7 +63,8 @@ def test_replayed_block_runs_as_its_launches_and_captures_again_for_a_new_key():
 def test_captured_sweeps_step_exactly_as_direct_ones():
     """The folded sheet dropping onto itself (self-contacts, ground friction): recorded launches and
     the solver's sweeps replayed as a captured block give bit-for-bit the positions of plain
-    ``wp.launch`` calls (``replay_launches`` off), also after a change of the host values they launch with (edge-edge contacts off, other
+    ``wp.launch`` calls (``replay_launches`` off), also after a change of the host values they
+    launch with (edge-edge contacts off, other
     friction between layers), which makes new captures."""
     from sim.model import cloth_model
     from sim.settings import SimSettings

@@ -11,9 +11,9 @@ from scipy.spatial import cKDTree
 from darts.errors import DartsInputError
 from sim.outfit import LAYER_GAP, closed_surface, layer_crossings, layer_order, loop_cap, outfit_model
 from sim.self_contact import SelfContact
-from sim.solvers.base import exclusion_rest
 from sim.settings import SimSettings
 from sim.simulation import Simulation
+from sim.solvers.base import exclusion_rest
 from tests.helpers import sheet_dart
 
 SIDE = 0.2  # m, the sheets' side
@@ -152,6 +152,7 @@ def test_garments_for_different_bodies_are_refused():
         outfit_model([inner, outer], ["a", "b"], *SLAB)
 
 
+@pytest.mark.slow
 def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, tmp_path):
     from pxr import Usd, UsdGeom
 
@@ -172,6 +173,7 @@ def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, t
     assert stats["frames"][0]["garments"]["long_pants"]["waist_height"] is not None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("tucked", [True, False], ids=["tucked", "worn-over"])
 def test_a_tucked_top_stays_under_the_waistband_through_a_walk(body, tucked):
     """A top named before the trousers is tucked in: its hem starts under the waistband and stays

@@ -134,6 +134,7 @@ def test_a_weaker_detection_is_taken_only_with_a_sure_person(monkeypatch):
     assert run([candidate(0.6, 0.1, 1.0), candidate(0.2, 0.99, 1.0)]) is None  # scores under 0.25
 
 
+@pytest.mark.slow
 def test_reconstruct_refuses_a_picture_without_a_person_in_one_line(tmp_path):
     """A separate process, so that what the model runtime prints on the process's stderr is seen:
     the gift box (which the classifier calls a short-sleeve top at 83 %) is one line, exit 2,
@@ -283,6 +284,7 @@ def test_a_crop_around_the_person_maps_back_onto_the_picture():
     assert (back & (disc > 0)).sum() / (back | (disc > 0)).sum() > 0.95
 
 
+@pytest.mark.slow
 def test_the_garment_network_learns_a_handful_of_masks_and_categories():
     """Four crops with a bright rectangle (the "garment") in different places, of two categories:
     a few dozen Adam steps fit their masks (IoU > 0.8) and categories."""

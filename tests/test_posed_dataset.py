@@ -72,6 +72,7 @@ def test_carry_keeps_a_point_on_its_triangle_at_its_height(body):
     assert np.percentile(np.abs(after - before), 90) < 2e-3 and not np.allclose(carried, points, atol=0.01)
 
 
+@pytest.mark.slow
 def test_a_posed_sample_agrees_with_itself(made, body):
     """The garment is worn (within 6 cm of the posed body, which has left its rest pose); its mask is
     inside the person's and not empty; the joints the camera sees project onto the person (the
@@ -90,7 +91,7 @@ def test_a_posed_sample_agrees_with_itself(made, body):
         folder = out / "/".join(sample["id"].split("-", 1))
         assert SAMPLE_FILES <= {p.name for p in folder.iterdir()}
         camera = Camera.from_json(folder / "camera.json")
-        read = lambda name: np.asarray(Image.open(folder / name)) > 127  # noqa: E731
+        read = lambda name, folder=folder: np.asarray(Image.open(folder / name)) > 127  # noqa: E731
         mask, person, other = read("mask.png"), read("person_mask.png"), read("other_mask.png")
         assert mask.shape == (camera.height, camera.width) and mask.sum() > 200 and not (mask & ~person).any()
         # both only where they tie at the garments' edge (10 pixels of a 440-pixel mask seen)
@@ -106,6 +107,7 @@ def test_a_posed_sample_agrees_with_itself(made, body):
         assert image[person].std() > 5 and image[~person].std() > 5
 
 
+@pytest.mark.slow
 def test_a_posed_sample_is_made_again_the_same(made, tmp_path):
     out, index, _, samples = made
     _, again = _make(tmp_path, index)
@@ -123,9 +125,9 @@ def test_the_posed_line_regressor_sees_a_sample_as_it_was_rendered(made, body):
     down 4 cm in the run, which the skinning does not know); the picture is grey off the garment."""
     import torch
 
+    from darts.motion.amass import load_motion
     from darts.photo.crop import Crop
     from darts.regress.posed_lines import MARGIN, load_posed_split, posed_garment, root_free
-    from darts.motion.amass import load_motion
     from darts.shipped import resolve_motion
     from darts.templates.categories import CATEGORIES
 

@@ -69,6 +69,7 @@ def test_the_garment_alone_hides_everything_outside_its_mask():
     assert torch.equal(x, y) and torch.all(x[0][:, ~torch.from_numpy(mask)] == NEUTRAL)
 
 
+@pytest.mark.slow
 def test_reconstruct_then_simulate_the_sample(run_darts, tmp_path):
     still = tmp_path / "still.npz"  # a three-frame AMASS motion: the body standing in its rest pose
     save_npz(still, poses=np.zeros((3, 156)), trans=np.tile([0.0, 0.0, 1.0], (3, 1)), betas=np.zeros(16),
@@ -221,6 +222,7 @@ def test_a_photograph_to_an_outfit_folder_that_darts_sim_runs(run_darts, run_sim
     assert data["stable"] and len(data["frames"]) == 3 and data["max_penetration"] < 0.02
 
 
+@pytest.mark.slow
 def test_darts_sim_runs_an_outfit_folder_in_its_layer_order(run_sim, tmp_path):
     """Two shipped garments written as an outfit folder (pants inner) simulate as the outfit of the
     two given one by one; a folder without outfit.json is one line and exit 2."""

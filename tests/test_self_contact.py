@@ -183,7 +183,8 @@ def _stacked_sheet(rng) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
     rest = np.array([[ps, py, 0.0] for ps in s for py in y])
     n = len(y)
     faces = np.array([f for i in range(len(s) - 1) for j in range(n - 1)
-                      for f in (((i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1), (i * n + j, (i + 1) * n + j + 1, i * n + j + 1)))])
+                      for f in (((i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1),
+                                 (i * n + j, (i + 1) * n + j + 1, i * n + j + 1)))])
     edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
     return positions, rest, faces, edges
 

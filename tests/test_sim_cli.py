@@ -56,6 +56,7 @@ def test_mesh_sequence_output(run_sim, tmp_path):
     assert len(garment.vertices) == vertex_count and np.isfinite(garment.vertices).all()
 
 
+@pytest.mark.slow
 def test_classic_amass_120fps_file_simulates_at_30fps(run_sim, tmp_path):
     write_classic_amass_120fps(MOTIONS_DIR / "run.npz", tmp_path / "amass_120.npz")
     stats_path = tmp_path / "stats.json"

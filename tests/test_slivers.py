@@ -29,7 +29,7 @@ def _seamed_grid():
     locked = np.zeros(len(vertices), bool)
     locked[np.concatenate(boundary_loops(faces))] = True
     lines = (("vertical", 0, 0.0405), ("horizontal", 1, 0.0603))
-    for name, axis, value in lines:
+    for _name, axis, value in lines:
         vertices, faces, values = insert_level_set(vertices, faces, vertices[:, axis] - value, locked=locked)
         locked = np.concatenate([locked, np.zeros(len(vertices) - len(locked), bool)]) | (values == 0)
     edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)

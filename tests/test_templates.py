@@ -244,6 +244,7 @@ def test_bad_template_requests_exit_2_without_output(tmp_path, run_darts, args, 
     assert not out.exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("category, betas", [
     ("sleeveless-dress", [-2.0, 1.5, -1.0]),  # the dress bridge once came out mis-oriented here
     ("short-sleeve-dress", [2.0, -1.0, 1.0]),

@@ -86,7 +86,8 @@ def as_rotation_matrices(pose: torch.Tensor, num_joints: int) -> torch.Tensor:
     elif pose.ndim == 3 and pose.shape[-1] == 3:
         rotations = axis_angle_to_matrix(pose)
     else:
-        raise ValueError(f"pose must be [B,{num_joints},3], [B,{3 * num_joints}] or [B,{num_joints},3,3], got {tuple(pose.shape)}")
+        raise ValueError(f"pose must be [B,{num_joints},3], [B,{3 * num_joints}] or [B,{num_joints},3,3], "
+                         f"got {tuple(pose.shape)}")
     if rotations.shape[1] != num_joints:
         raise ValueError(f"pose has {rotations.shape[1]} joints, the model has {num_joints}")
     return rotations

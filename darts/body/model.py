@@ -43,7 +43,7 @@ class BodyModel(BodySizes):
         return self.v_template.dtype
 
     @classmethod
-    def from_arrays(cls, body, dtype: torch.dtype | None = None) -> "BodyModel":
+    def from_arrays(cls, body, dtype: torch.dtype | None = None) -> BodyModel:
         """The model of validated ``BodyArrays`` (``darts.body.io``), tensors of ``dtype`` (float32 by default)."""
         dtype = torch.float32 if dtype is None else dtype
         as_tensor = lambda a: None if a is None else torch.as_tensor(a, dtype=dtype)  # noqa: E731
@@ -51,7 +51,7 @@ class BodyModel(BodySizes):
                    as_tensor(body.posedirs), as_tensor(body.J_regressor), as_tensor(body.weights),
                    body.parents, body.gender, dict(body.metadata))
 
-    def to(self, dtype: torch.dtype) -> "BodyModel":
+    def to(self, dtype: torch.dtype) -> BodyModel:
         """A copy whose tensors have ``dtype``."""
         cast = lambda t: None if t is None else t.to(dtype)  # noqa: E731
         return BodyModel(self.name, cast(self.v_template), self.faces, cast(self.shapedirs),

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import json
 
-from darts.crdl import SOLVERS
 from darts.cli.reconstruct import add_silhouette_options
+from darts.crdl import SOLVERS
 from darts.crdl.targets import EDITS
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output

@@ -5,16 +5,16 @@ import json
 
 import numpy as np
 
+from darts.api import load_garment
 from darts.dart.accessories import ACCESSORIES
 from darts.dart.export import MESH_FORMATS, export_mesh, panel_colors
-from darts.api import load_garment
 from darts.dart.model import MATERIALS, Dart, parse_seam_setting
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
 from darts.geometry.mesh import loop_length, vertex_normals
-from darts.templates.defaults import DEFAULT_EDGE_LENGTH
-from darts.templates.categories import CATEGORIES
 from darts.shipped import garment_help
+from darts.templates.categories import CATEGORIES
+from darts.templates.defaults import DEFAULT_EDGE_LENGTH
 
 
 def template(args) -> int:

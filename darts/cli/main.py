@@ -8,7 +8,8 @@
     darts template --list
     darts inspect garment.npz [--json] [--png out.png]
     darts export garment.npz -o out.obj|ply|glb
-    darts import mesh.obj|ply|stl|glb|usd -o garment.npz [--category C] [--units mm|cm|m] [--up y|z] [--report r.json] [--png p.png]
+    darts import mesh.obj|ply|stl|glb|usd -o garment.npz [--category C] [--units mm|cm|m] [--up y|z]
+                 [--report r.json] [--png p.png]
 
 MOTION is an AMASS-format .npz, or the name of a shipped motion (walk, run, wave, jumping_jacks,
 twist, squat). Bad input prints one ``darts: error: FILE: problem`` line and exits with code 2.
@@ -24,11 +25,11 @@ import numpy as np
 
 from darts import __version__
 from darts.body.io import export_smpl_npz, read_body
-from darts.cli.errors import OneLineParser, run_guarded
 from darts.cli.deform import add_parser as add_deform_parser
-from darts.cli.reconstruct import add_parsers as add_reconstruct_parsers
+from darts.cli.errors import OneLineParser, run_guarded
 from darts.cli.garment import add_parsers as add_garment_parsers
 from darts.cli.importer import add_parser as add_import_parser
+from darts.cli.reconstruct import add_parsers as add_reconstruct_parsers
 from darts.errors import DartsInputError
 from darts.fileio import check_output, save_npz
 from darts.motion.amass import load_motion
@@ -36,7 +37,8 @@ from darts.shipped import motion_help, resolve_motion, shipped_motions
 
 
 def _add_body_args(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--body", metavar="PATH", help="SMPL / SMPL-H / SMPL-X model file (.pkl or .npz); default: the bundled body")
+    parser.add_argument("--body", metavar="PATH",
+                        help="SMPL / SMPL-H / SMPL-X model file (.pkl or .npz); default: the bundled body")
     parser.add_argument("--betas", type=float, nargs="+", metavar="B", help="shape coefficients (at most the model's count)")
 
 
@@ -107,7 +109,8 @@ def body_pose(args) -> int:
              fps=np.array(motion.fps), betas=motion_betas(model, motion, args.betas),
              frame=np.array("AMASS world: Z up, metres"))
     print(f"wrote {args.output}: {motion.num_frames} frames at {motion.fps:g} fps, "
-          f"{model.num_vertices} vertices ({time.perf_counter() - started:.1f} s); lowest point z = {vertices[..., 2].min():.3f} m")
+          f"{model.num_vertices} vertices ({time.perf_counter() - started:.1f} s); "
+          f"lowest point z = {vertices[..., 2].min():.3f} m")
     return 0
 
 

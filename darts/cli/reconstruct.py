@@ -40,7 +40,8 @@ def classify(args) -> int:
             return 0
         for garment in reversed(outfit.garments):
             others = ", ".join(f"{c} {100 * p:.1f} %" for c, p in garment.ranked[1: args.top])
-            print(f"{garment.kind:6s} {garment.category:20s} {100 * garment.probability:6.2f} %" + (f"  ({others})" if others else ""))
+            line = f"{garment.kind:6s} {garment.category:20s} {100 * garment.probability:6.2f} %"
+            print(line + (f"  ({others})" if others else ""))
         for note in outfit.notes:
             print(f"note: {note}")
         return 0

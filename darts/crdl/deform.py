@@ -9,11 +9,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from darts.body.model import BodyModel
+from darts.crdl import SOLVERS
 from darts.crdl.fit import FitSurface
 from darts.crdl.layer import Crdl, CrdlResult, CrdlWeights
 from darts.crdl.targets import correspond
 from darts.dart.model import Dart, welded
-from darts.crdl import SOLVERS
 from darts.errors import DartsInputError
 
 

@@ -31,7 +31,6 @@ from darts.crdl.arap import arap_energy, arap_system, best_rotations, rotated_re
 from darts.crdl.fit import FitSurface, fit_deficit, row_dot
 from darts.crdl.local_step import LocalStep
 
-
 #: Metres beyond the margin within which a vertex joins the contact set before the first round.
 CONTACT_BAND = 0.01
 #: Steps over which the relative decrease is averaged for the stopping test (accelerated steps are
@@ -273,7 +272,8 @@ class Crdl:
             new_g = self._global_matrix_times(new_p, contacts) - new_rhs
             change = new_g - g
             curvature = _dot(step, change)
-            if float(curvature.detach()) > 1e-12 * float((step.norm() * change.norm()).detach()):  # E is not convex: skip the pair
+            # E is not convex where the curvature is not positive: skip the pair
+            if float(curvature.detach()) > 1e-12 * float((step.norm() * change.norm()).detach()):
                 pairs = (pairs + [(step, change, 1.0 / curvature)])[-memory:]
             p, value, g = new_p, new_value, new_g
             history.append(float(value))
@@ -298,7 +298,8 @@ class Crdl:
         none (or after ``rounds``). A vertex once in contact stays in the set (its term is zero
         while it is clear), so the set only grows and E of every round majorises the next.
         Without ``start`` the first round races two starts (``_race``)."""
-        handle_rhs = torch.zeros_like(self.system.rest).index_add(0, self.handles, self.weights.handle * self._handle_multipliers * targets)
+        handle_rhs = torch.zeros_like(self.system.rest).index_add(0, self.handles,
+                                                                  self.weights.handle * self._handle_multipliers * targets)
         round_tolerance = max(tolerance, ROUND_TOLERANCE) if self.surface is not None else tolerance
         if start is None:
             p, history, in_contact, spent = self._race(targets, handle_rhs, iterations, round_tolerance)

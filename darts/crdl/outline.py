@@ -62,7 +62,7 @@ class Outline(SilhouetteTerm):
         keep = np.linspace(0, len(rows) - 1, min(len(rows), OUTLINE_POINTS)).round().astype(np.int64)
         self.outline = np.stack([cols[keep], rows[keep]], 1).astype(np.float64) + 0.5
 
-    def bind(self, vertices: np.ndarray, faces: np.ndarray) -> "Outline":
+    def bind(self, vertices: np.ndarray, faces: np.ndarray) -> Outline:
         """The same term: it reads the vertices only, not the mesh's ``faces``."""
         return self
 

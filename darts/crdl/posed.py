@@ -31,7 +31,7 @@ class Posing:
     offset: torch.Tensor
 
     @classmethod
-    def of(cls, body, pose: np.ndarray, betas, vertices: np.ndarray) -> "Posing":
+    def of(cls, body, pose: np.ndarray, betas, vertices: np.ndarray) -> Posing:
         """The posing of a garment at rest ``vertices`` [V,3] by ``body`` (a ``BodyModel``) at ``pose``
         [J,3] axis-angles (the root's first) and ``betas`` (None or empty: the body's rest shape)."""
         from darts.body import lbs
@@ -59,7 +59,7 @@ class PosedTerm(SilhouetteTerm):
     def __init__(self, inner: SilhouetteTerm, body, pose: np.ndarray, betas=None, posing: Posing | None = None):
         self.inner, self.body, self.pose, self.betas, self.posing = inner, body, pose, betas, posing
 
-    def bind(self, vertices: np.ndarray, faces: np.ndarray) -> "PosedTerm":
+    def bind(self, vertices: np.ndarray, faces: np.ndarray) -> PosedTerm:
         posing = Posing.of(self.body, self.pose, self.betas, vertices)
         inner = self.inner.bind(posing(torch.as_tensor(vertices, dtype=torch.float64)).numpy(), faces)
         return PosedTerm(inner, self.body, self.pose, self.betas, posing)

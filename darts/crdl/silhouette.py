@@ -82,11 +82,11 @@ class Silhouette(SilhouetteTerm):
         self.faces = faces
 
     @classmethod
-    def from_files(cls, mask_path, camera_path) -> "Silhouette":
+    def from_files(cls, mask_path, camera_path) -> Silhouette:
         camera = Camera.from_json(camera_path)
         return cls(read_mask(mask_path, camera.width, camera.height), camera)
 
-    def bind(self, vertices: np.ndarray, faces: np.ndarray) -> "Silhouette":
+    def bind(self, vertices: np.ndarray, faces: np.ndarray) -> Silhouette:
         """The same term for the mesh with ``faces`` (the welded garment's)."""
         return Silhouette(self.mask.numpy(), self.camera, np.asarray(faces, np.int64))
 

@@ -135,7 +135,7 @@ class Correspondence:
     second: np.ndarray
     weight: np.ndarray
 
-    def points(self, target: "torch.Tensor") -> "torch.Tensor":
+    def points(self, target: torch.Tensor) -> torch.Tensor:
         """The matched target points [K,3] (differentiable in ``target`` [M,3])."""
         import torch
 

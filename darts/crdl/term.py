@@ -9,7 +9,7 @@ class SilhouetteTerm:
     ``bind(vertices, faces)`` gives the term for the CRDL's mesh (its rest ``vertices`` [V,3], where
     the solve starts, and ``faces``)."""
 
-    def bind(self, vertices, faces) -> "SilhouetteTerm":
+    def bind(self, vertices, faces) -> SilhouetteTerm:
         raise NotImplementedError
 
     def loss(self, vertices: torch.Tensor) -> torch.Tensor:

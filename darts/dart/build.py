@@ -9,8 +9,8 @@ from darts.dart.model import MATERIALS, Dart, Seam
 from darts.dart.panels import split_panels
 from darts.errors import DartsInputError
 from darts.templates.build import Template, build_template
-from darts.templates.defaults import DEFAULT_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
+from darts.templates.defaults import DEFAULT_EDGE_LENGTH
 
 
 def _panel_name(centroid: np.ndarray, template: Template, family: str) -> str:

@@ -65,7 +65,8 @@ def _shape(arrays, key, shape, kind, source):
         expected = {"iu": "integers", "f": "floats", "U": "text", "b": "booleans"}[kind]
         raise DartsInputError(source, f"'{key}' has dtype {value.dtype}, expected {expected}")
     if len(shape) != value.ndim or any(s is not None and s != v for s, v in zip(shape, value.shape)):
-        raise DartsInputError(source, f"'{key}' has shape {value.shape}, expected {tuple('N' if s is None else s for s in shape)}")
+        raise DartsInputError(source,
+                              f"'{key}' has shape {value.shape}, expected {tuple('N' if s is None else s for s in shape)}")
     return value if kind == "U" else require_real(key, value, source)
 
 
@@ -108,7 +109,8 @@ def dart_from_arrays(arrays: dict, source) -> Dart:
     stiffness = _shape(arrays, "seam_stiffness", (count,), "f", source)
     rest = _shape(arrays, "seam_rest_length", (count,), "f", source)
     ranges = _shape(arrays, "seam_partial_range", (count, 2), "f", source)
-    seams = [Seam(n, r, float(k), float(l), (float(a), float(b))) for n, r, k, l, (a, b) in zip(seam_names, regimes, stiffness, rest, ranges)]
+    seams = [Seam(n, r, float(k), float(l), (float(a), float(b)))
+             for n, r, k, l, (a, b) in zip(seam_names, regimes, stiffness, rest, ranges)]
     for seam in seams:
         if seam.regime not in REGIMES:
             raise DartsInputError(source, f"seam '{seam.name}': unknown regime '{seam.regime}'")
@@ -116,7 +118,8 @@ def dart_from_arrays(arrays: dict, source) -> Dart:
     pairs = _indices(arrays | {"pairs": _shape(arrays, "pairs", (None, 2), "iu", source)}, "pairs", len(vertices), source)
     if len(pairs) and (pairs[:, 0] == pairs[:, 1]).any():
         raise DartsInputError(source, "a seam pair joins a vertex to itself")
-    pair_seam = _indices(arrays | {"pair_seam": _shape(arrays, "pair_seam", (len(pairs),), "iu", source)}, "pair_seam", count, source)
+    pair_seam = _indices(arrays | {"pair_seam": _shape(arrays, "pair_seam", (len(pairs),), "iu", source)},
+                         "pair_seam", count, source)
     position = _shape(arrays, "pair_position", (len(pairs),), "f", source)
     if len(position) and (position.min() < 0 or position.max() > 1):
         raise DartsInputError(source, "'pair_position' must lie in [0, 1]")
@@ -134,9 +137,12 @@ def dart_from_arrays(arrays: dict, source) -> Dart:
                               "hull_faces", len(hull_vertices), source).astype(np.int32)
     dart = Dart(
         category=category, vertices=vertices.astype(np.float32), faces=faces.astype(np.int32), panel=panel.astype(np.int32),
-        panel_names=panel_names, lines={n: line_vertices[offsets[i]:offsets[i + 1]].astype(np.int32) for i, n in enumerate(line_names)},
-        seams=seams, pairs=pairs.astype(np.int32), pair_seam=pair_seam.astype(np.int32), pair_position=position.astype(np.float32),
-        body_model=_text(arrays, "body_model", source), body_betas=_shape(arrays, "body_betas", (None,), "f", source).astype(np.float32),
+        panel_names=panel_names,
+        lines={n: line_vertices[offsets[i]:offsets[i + 1]].astype(np.int32) for i, n in enumerate(line_names)},
+        seams=seams, pairs=pairs.astype(np.int32), pair_seam=pair_seam.astype(np.int32),
+        pair_position=position.astype(np.float32),
+        body_model=_text(arrays, "body_model", source),
+        body_betas=_shape(arrays, "body_betas", (None,), "f", source).astype(np.float32),
         material_name=_text(arrays, "material_name", source), material=material,
         hull_vertices=None if hull_vertices is None else hull_vertices.astype(np.float32), hull_faces=hull_faces,
         accessories=[str(a) for a in _shape(arrays, "accessories", (None,), "U", source)],

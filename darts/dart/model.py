@@ -59,17 +59,20 @@ class Seam:
         if not np.isfinite(self.stiffness) or self.stiffness < 0:
             raise DartsInputError(source, f"seam '{self.name}': stiffness must be >= 0, got {self.stiffness}")
         if not np.isfinite(self.rest_length) or self.rest_length < 0 or (self.regime == "repulsive" and self.rest_length <= 0):
-            raise DartsInputError(source, f"seam '{self.name}': rest length must be >= 0 (> 0 when repulsive), got {self.rest_length}")
+            raise DartsInputError(source,
+                                  f"seam '{self.name}': rest length must be >= 0 (> 0 when repulsive), got {self.rest_length}")
         if self.regime not in ("repulsive",) and self.rest_length != 0:
             raise DartsInputError(source, f"seam '{self.name}': a {self.regime} seam has rest length 0, got {self.rest_length}")
         a, b = self.partial_range
         if not (0.0 <= a < b <= 1.0):
-            raise DartsInputError(source, f"seam '{self.name}': partial range must satisfy 0 <= a < b <= 1, got {self.partial_range}")
+            raise DartsInputError(source,
+                                  f"seam '{self.name}': partial range must satisfy 0 <= a < b <= 1, got {self.partial_range}")
 
 
 def seam_with_regime(seam: Seam, regime: str, stiffness: float | None = None) -> Seam:
     """``seam`` switched to ``regime`` with that regime's defaults (and ``stiffness`` if given)."""
-    updated = replace(seam, regime=regime, stiffness=DEFAULT_STIFFNESS.get(regime, 0.0) if stiffness is None else float(stiffness),
+    updated = replace(seam, regime=regime,
+                      stiffness=DEFAULT_STIFFNESS.get(regime, 0.0) if stiffness is None else float(stiffness),
                       rest_length=DEFAULT_REST_LENGTH.get(regime, 0.0))
     updated.check()
     return updated

@@ -101,7 +101,7 @@ def split_panels(vertices: np.ndarray, faces: np.ndarray, seam_edges: list[np.nd
 
 def _map_loop(new_faces: np.ndarray, template_faces: np.ndarray, loop: np.ndarray) -> np.ndarray:
     lookup = {}
-    for f, (tri, new) in enumerate(zip(template_faces, new_faces)):
+    for tri, new in zip(template_faces, new_faces):
         for k in range(3):
             lookup[(int(tri[k]), int(tri[(k + 1) % 3]))] = (int(new[k]), int(new[(k + 1) % 3]))
     out: list[int] = []

@@ -51,7 +51,8 @@ class SurfaceDistance:
         self._faces = wp.array(np.ascontiguousarray(faces, np.int32).reshape(-1), dtype=wp.int32, device=device)
         self.mesh = wp.Mesh(points=self._points, indices=self._faces, support_winding_number=True)
 
-    def query(self, points: np.ndarray, max_dist: float = 10.0, winding: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def query(self, points: np.ndarray, max_dist: float = 10.0,
+              winding: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(signed distance [N], closest surface point [N,3], outward face normal there [N,3]). The
         sign is by the winding number, or (``winding`` False, ten times faster) by the angle-weighted
         pseudo-normal at the closest point, exact for a closed mesh that does not intersect itself."""

@@ -51,7 +51,7 @@ class Motion:
         names = ("body_pose", "hand_pose", "smpl_hand_pose", "jaw_pose", "eye_pose")
         return {name: getattr(self, name) for name in names if getattr(self, name) is not None}
 
-    def with_frames(self, **arrays) -> "Motion":
+    def with_frames(self, **arrays) -> Motion:
         """A copy with some per-frame arrays replaced (same fields as the constructor)."""
         return replace(self, **arrays)
 
@@ -126,7 +126,9 @@ def load_motion(path: str | os.PathLike) -> Motion:
         width = np.asarray(arrays["poses"]).shape[-1] if np.asarray(arrays["poses"]).ndim == 2 else -1
         layouts = {72: "amass-smpl", 156: "amass-smplh", 165: "amass-smplx"}
         if width not in layouts:
-            raise DartsInputError(path, f"'poses' has shape {np.asarray(arrays['poses']).shape}, expected [T, 72], [T, 156] or [T, 165]")
+            raise DartsInputError(path,
+                                  f"'poses' has shape {np.asarray(arrays['poses']).shape}, "
+                                  "expected [T, 72], [T, 156] or [T, 165]")
         poses = _rotations(arrays, "poses", width // 3, frames, path)
         body = poses[:, :NUM_BODY_JOINTS]
         if width == 72:

@@ -9,8 +9,8 @@ sliding: the stance foot for gaits, the mean of both ankles otherwise.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 import torch

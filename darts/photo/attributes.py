@@ -41,7 +41,7 @@ import numpy as np
 from scipy.special import expit
 
 from darts.body.segmentation import PART_INDEX
-from darts.photo.parsing import BACKGROUND, DRESS, LOWER, OTHER, SKIN, UPPER, Parsing
+from darts.photo.parsing import BACKGROUND, DRESS, LOWER, SKIN, UPPER, Parsing
 
 BINS = 10
 #: a limb counts as seen when this many of its bins hold at least ``MIN_BIN`` pixels

@@ -42,7 +42,7 @@ class ColourModel:
     covariances: np.ndarray
 
     @classmethod
-    def fit(cls, colours: np.ndarray, components: int = 3, seed: int = 0) -> "ColourModel | None":
+    def fit(cls, colours: np.ndarray, components: int = 3, seed: int = 0) -> ColourModel | None:
         """The mixture of ``colours`` [N,3] (Lab) with up to ``components`` clusters (fewer when
         there are few colours; empty clusters dropped); None for fewer than 8 colours."""
         from scipy.cluster.vq import kmeans2

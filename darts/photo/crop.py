@@ -20,7 +20,7 @@ class Crop:
     side: float
 
     @classmethod
-    def around(cls, mask: np.ndarray, margin: float) -> "Crop | None":
+    def around(cls, mask: np.ndarray, margin: float) -> Crop | None:
         """The square around the pixels of ``mask`` [H,W] bool: their box widened by ``margin`` of its
         longer side on each side, centred on it; None for an empty mask."""
         rows, cols = np.nonzero(mask)

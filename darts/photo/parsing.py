@@ -85,7 +85,7 @@ class Parsing:
     picture_size: tuple[int, int]  # (width, height) of the picture the crop was taken from
     evidence: dict = field(default_factory=dict)
 
-    def split_one_piece(self) -> "Parsing":
+    def split_one_piece(self) -> Parsing:
         """The same parsing with the one-piece cloth taken as two garments of one colour (a suit):
         its pixels on the hips and legs lower, the rest upper."""
         labels = self.labels.copy()

@@ -15,7 +15,7 @@ static-image mode does too).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -72,7 +72,7 @@ class Person:
                 "world_m": {n: self.world[k].round(4).tolist() for k, n in enumerate(LANDMARKS)}}
 
 
-@lru_cache(maxsize=None)
+@cache
 def _interpreter(name: str):
     """Model ``name`` loaded into LiteRT, on one thread. LiteRT prints an INFO line on the process's
     stderr (file descriptor 2) when it sets up its CPU delegate; that stays out of our stderr."""

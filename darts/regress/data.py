@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +25,7 @@ from darts.templates.categories import CATEGORIES
 CATEGORY_IDS = list(CATEGORIES)
 
 
-@lru_cache(maxsize=None)
+@cache
 def initial_lines(category: str) -> np.ndarray:
     """F_g of ``category``: [L, LINE_POINTS, 3] (canonical frame, metres)."""
     from darts.dart.io import load_dart
@@ -81,7 +81,7 @@ class Samples:
     def __len__(self) -> int:
         return len(self.ids)
 
-    def index(self, rows) -> "Samples":
+    def index(self, rows) -> Samples:
         rows = torch.as_tensor(rows)
         pick = lambda t: t[rows]  # noqa: E731
         return Samples([self.ids[i] for i in rows.tolist()], [self.folders[i] for i in rows.tolist()], pick(self.images),
@@ -110,5 +110,6 @@ def load_split(root: str | Path, split: str, limit: int | None = None) -> Sample
         line_masks.append(mask)
         creases.append(crease)
     return Samples([f.name for f in folders], folders, torch.from_numpy(np.stack(images)), torch.from_numpy(np.stack(masks)),
-                   torch.from_numpy(np.stack(foreground)), torch.tensor(categories), camera_batch(cameras), torch.from_numpy(np.stack(lines)),
+                   torch.from_numpy(np.stack(foreground)), torch.tensor(categories), camera_batch(cameras),
+                   torch.from_numpy(np.stack(lines)),
                    torch.from_numpy(np.stack(initial)), torch.from_numpy(np.stack(line_masks)), torch.tensor(np.stack(creases)))

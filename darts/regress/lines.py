@@ -58,7 +58,7 @@ class CameraBatch:
         depth = camera[..., 2:].clamp_min(1e-3)
         return camera[..., :2] / depth * self.focal[:, None] + self.centre[:, None]
 
-    def index(self, rows) -> "CameraBatch":
+    def index(self, rows) -> CameraBatch:
         return CameraBatch(self.rotation[rows], self.translation[rows], self.focal[rows], self.centre[rows],
                            self.width, self.height)
 

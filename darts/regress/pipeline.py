@@ -29,8 +29,9 @@ from darts.camera import IMAGE_SIZE, Camera
 from darts.errors import DartsInputError
 from darts.regress.data import CATEGORY_IDS, camera_batch, initial_lines, padded
 from darts.regress.shipped import shipped_model
-from darts.templates.defaults import DATASET_EDGE_LENGTH
 from darts.templates.categories import CATEGORIES
+from darts.templates.defaults import DATASET_EDGE_LENGTH
+
 
 def network_input(image: np.ndarray) -> torch.Tensor:
     """uint8 [H,W,3] -> float [1,3,224,224] in [0,1] (bilinear resize when the size differs)."""
@@ -238,7 +239,8 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
         lines = regress_posed_lines(image, mask, body_fit.camera, body, body_fit.pose, betas, category,
                                     template_lines(template, category))
         if chosen is not None:  # the lengths the photograph shows, where the garment ends along the body
-            from darts.photo.lengths import length_targets as targets_of, place_lines
+            from darts.photo.lengths import length_targets as targets_of
+            from darts.photo.lengths import place_lines
 
             length_targets = targets_of(category, chosen.attributes, body, betas)
             placed, length_report = place_lines(lines, length_targets, template.vertices.mean(0))

@@ -121,7 +121,7 @@ def regress_posed_lines(image: np.ndarray, mask: np.ndarray, camera: Camera, bod
 
 
 def load_posed_split(root: str | Path, split: str, body, limit: int | None = None,
-                     garments: dict[str, "PosedGarment"] | None = None) -> Samples:
+                     garments: dict[str, PosedGarment] | None = None) -> Samples:
     """The samples of a posed dataset's ``root/split`` (``darts dataset make --posed``) as the posed
     line regressor sees them (``darts.regress.posed_lines``): the garment's crop, grey off its mask;
     its camera cropped and turned by the body's root rotation; the template's lines on the body's

@@ -1,7 +1,7 @@
 """The networks shipped in ``darts/regress/weights/``, each loaded once per process."""
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 from darts.errors import DartsInputError
@@ -9,7 +9,7 @@ from darts.errors import DartsInputError
 WEIGHTS = Path(__file__).parent / "weights"
 
 
-@lru_cache(maxsize=None)
+@cache
 def shipped_model(kind: str, name: str):
     """A shipped network (``weights/<name>.pt``, a checkpoint of ``kind``: classifier or lines) and
     its record."""

@@ -3,7 +3,8 @@ give the same weights), and their checkpoints.
 
 Augmentation (training only, on the fly, from the run's own generator): 80 % of the pictures get
 a random background behind their garment and body (domain randomisation, ``random_backgrounds``:
-smooth or blocky value noise, stripes or a gradient between two random colours); then brightness x0.75-1.25, contrast x0.75-1.25 about the picture's mean, saturation
+smooth or blocky value noise, stripes or a gradient between two random colours); then brightness
+x0.75-1.25, contrast x0.75-1.25 about the picture's mean, saturation
 x0.7-1.3, Gaussian noise sigma 0-0.03; the classifier also sees, per picture, zooms of +-25 %,
 shifts of up to 8 pixels, mirror images (half; every category is left-right symmetric) and grey
 pictures (a fifth) (the regressor does not: its camera is fixed). No hue is changed: the held-out hues of the
@@ -35,7 +36,6 @@ import torch
 from torch.nn import functional
 
 from darts.checkpoint import load_model
-
 from darts.regress.classifier import GarmentClassifier
 from darts.regress.data import Samples
 from darts.regress.lines import FeatureLineRegressor

@@ -22,8 +22,7 @@ from darts.geometry.remesh import remesh
 from darts.geometry.slivers import remove_slivers
 from darts.templates.categories import CATEGORIES, SIDES, Category, seam_fields
 from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH
-from darts.templates.landmarks import (Landmarks, above_field, arm_field, below_field, landmarks,
-                                       neckline_field)
+from darts.templates.landmarks import Landmarks, above_field, arm_field, below_field, landmarks, neckline_field
 
 #: edges shorter than this fraction of the median edge are collapsed (seam insertion leaves them)
 MIN_EDGE_FRACTION = 1 / 3

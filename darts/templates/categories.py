@@ -5,8 +5,8 @@ long it is. Lengths are set from body landmarks, so templates fit any body shape
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -104,7 +104,8 @@ def seam_fields(category: Category, lm: Landmarks) -> list[SeamField]:
                 band = lm.j(f"{side}_shoulder")[1] - 0.2
                 fields.append(SeamField(
                     lambda p, c=centre, a=axis: (p - c) @ a,
-                    lambda p, s=side, b=band, c=centre: np.where((p[:, 1] > b) & (np.sign(p[:, 0]) == np.sign(c[0])), f"{s}_armhole", "")))
+                    lambda p, s=side, b=band, c=centre:
+                        np.where((p[:, 1] > b) & (np.sign(p[:, 0]) == np.sign(c[0])), f"{s}_armhole", "")))
     if category.family == "dress":
         fields.append(SeamField(lambda p: p[:, 1] - lm.waist_y, lambda p: np.full(len(p), "waist")))
         fields.append(SeamField(lambda p: p[:, 0] - lm.j("pelvis")[0],
@@ -121,7 +122,8 @@ def seam_fields(category: Category, lm: Landmarks) -> list[SeamField]:
 
         fields.append(SeamField(front, legs))
         fields.append(SeamField(lambda p: p[:, 0] - lm.j("pelvis")[0],
-                                lambda p: np.where(p[:, 1] >= waistband_y, "", np.where(p[:, 2] >= lm.front_z, "centre_front", "centre_back"))))
+                                lambda p: np.where(p[:, 1] >= waistband_y, "",
+                                                   np.where(p[:, 2] >= lm.front_z, "centre_front", "centre_back"))))
     if category.family in ("pants", "skirt"):
         fields.append(SeamField(lambda p: p[:, 1] - waistband_y, lambda p: np.full(len(p), "waistband")))
     return fields

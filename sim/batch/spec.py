@@ -198,7 +198,8 @@ def sim_job(garment: str, motion: str, body: Body, material: str | None, seams: 
             settings[name] = value
         elif where == "job":
             options[name] = value
-    return SimJob(list(garment) if isinstance(garment, tuple) else garment, motion, SimSettings(**settings), body=body.file, betas=list(body.betas) if body.betas else None,
+    return SimJob(list(garment) if isinstance(garment, tuple) else garment, motion, SimSettings(**settings), body=body.file,
+                  betas=list(body.betas) if body.betas else None,
                   material=material, seams=seams.settings,
                   output=f"{JOB_FOLDER}/sim.{form}" if form.startswith("usd") else f"{JOB_FOLDER}/frames",
                   format=form if form in ("obj", "ply") else "obj", stats=f"{JOB_FOLDER}/stats.json",
@@ -222,7 +223,8 @@ def _job(garment: str, motion: str, body: Body, material: str | None, seams: Sea
         checker.fail(where, exc.problem)
     request = job.to_dict()
     digest = hashlib.sha1(json.dumps(request, sort_keys=True).encode()).hexdigest()[:6]
-    parts = ["+".join(_stem(g) for g in garment) if isinstance(garment, tuple) else _stem(garment), _stem(motion), body.name] + ([material] if material else []) + (
+    parts = ["+".join(_stem(g) for g in garment) if isinstance(garment, tuple) else _stem(garment), _stem(motion),
+             body.name] + ([material] if material else []) + (
         [seams.name] if seams.settings else [])
     inputs = {"garment": garment, "motion": motion, "body": body.name, "betas": list(body.betas or ()),
               "body_file": body.file, "material": material or "own", "seams": seams.name,

@@ -10,7 +10,7 @@ widens the camera's range, so that a network's robustness to appearance can be m
 | print | plain, stripes, checks | dots, waves |
 | background | vertical two-colour gradient | speckled noise, another palette |
 | light | 20-60 deg up, within 40 deg of the camera | 5-20 deg up, 40-75 deg to the side |
-| camera yaw / pitch / distance | within +-25 deg / +-3 deg / x0.9-1.15 | 25-40 deg / 4-10 deg up or down / x0.85-0.9 or 1.15-1.25 |
+| camera yaw / pitch / distance | +-25 deg / +-3 deg / x0.9-1.15 | 25-40 / 4-10 deg up or down / x0.85-0.9 or 1.15-1.25 |
 
 Cameras are framed per category (``darts.camera.FRAMES``) and jittered about the category's
 default camera (``Camera.default``). The seen range keeps the camera level with the garment's

@@ -68,7 +68,8 @@ def summarise(garments: list[dict], samples: list[dict], args) -> dict:
     stages, garment_keys, sample_keys = SUMMARY_KEYS["posed" if args.posed else "rest"]
     return {
         "command": f"darts dataset make OUT_DIR --count {args.count} --seed {args.seed} --views {args.views}"
-                   + (f" --categories {' '.join(args.categories)}" if args.categories else "") + (" --posed" if args.posed else ""),
+                   + (f" --categories {' '.join(args.categories)}" if args.categories else "")
+                   + (" --posed" if args.posed else ""),
         "garments": len(ok_garments), "samples": len(ok_samples),
         "garments_dropped": {r["id"]: r["error"] for r in garments if r["status"] == "unstable"},
         "garments_failed": {r["id"]: r["error"] for r in garments if r["status"] == "failed"},

@@ -58,8 +58,8 @@ def make_garment(job: Job, folder: Path) -> dict:
     from darts.dart.build import make_dart
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
-    from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
     from darts.templates.categories import CATEGORIES
+    from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
     from sim.dataset.drape import drape
 
     recipe = garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]))
@@ -104,7 +104,8 @@ def line_mask_distances(pixels: np.ndarray, mask: np.ndarray) -> tuple[np.ndarra
     col = np.clip(np.floor(pixels[:, 0]).astype(int), 0, w - 1)
     row = np.clip(np.floor(pixels[:, 1]).astype(int), 0, h - 1)
     outside = (pixels[:, 0] < 0) | (pixels[:, 0] >= w) | (pixels[:, 1] < 0) | (pixels[:, 1] >= h)
-    extra = np.where(outside, np.maximum.reduce([-pixels[:, 0], pixels[:, 0] - w, -pixels[:, 1], pixels[:, 1] - h, np.zeros(len(pixels))]), 0)
+    extra = np.where(outside, np.maximum.reduce([-pixels[:, 0], pixels[:, 0] - w, -pixels[:, 1], pixels[:, 1] - h,
+                                                 np.zeros(len(pixels))]), 0)
     return to_boundary[row, col] + extra, to_mask[row, col] + extra
 
 

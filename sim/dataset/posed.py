@@ -96,13 +96,13 @@ def make_posed_garment(job: Job, folder: Path) -> dict:
     from darts.dart.build import make_dart
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
+    from darts.geometry.loops import feature_lines
     from darts.motion.amass import load_motion
     from darts.shipped import resolve_motion
     from darts.templates.categories import CATEGORIES
     from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
     from sim.body_track import build_body_track
     from sim.dataset.drape import DRAPE_SOLVER
-    from darts.geometry.loops import feature_lines
     from sim.run import simulate
     from sim.settings import SimSettings
 

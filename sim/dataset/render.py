@@ -7,8 +7,8 @@ the other garment worn with it, ``sim.dataset.posed``).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -24,7 +24,8 @@ def _spring_block(d: wp.vec3, rest: float, stiffness: float):
         return wp.vec3(0.0), stiffness * wp.identity(n=3, dtype=float)
     n = d / length
     nn = wp.outer(n, n)
-    return -stiffness * (length - rest) * n, stiffness * (nn + wp.max(0.0, 1.0 - rest / length) * (wp.identity(n=3, dtype=float) - nn))
+    slack = wp.max(0.0, 1.0 - rest / length)
+    return -stiffness * (length - rest) * n, stiffness * (nn + slack * (wp.identity(n=3, dtype=float) - nn))
 
 
 @wp.kernel
@@ -203,7 +204,8 @@ class MassSpringSolver(Solver):
         self.launch(spring_forces, self.pairs.shape[0],
                     [self.pairs, self.rest, self.stiffness, state_in.x, self.force, self.blocks, self.diagonal])
         self.launch(hinge_forces, self.hinges.shape[0],
-                    [self.hinges, self.rest_cos, self.rest_sin, self.kappa, state_in.x, self.force, self.gradients, self.diagonal])
+                    [self.hinges, self.rest_cos, self.rest_sin, self.kappa, state_in.x, self.force, self.gradients,
+                     self.diagonal])
         self.launch(gravity_guess, self.count, [state_in.v, wp.vec3(*self.settings.gravity), dt, self.dv, self.z])
         self._stiffness_product(self.z, h2, 0.0)  # h^2 H (v + dv0)
         rz = self.scalar[0]

@@ -16,8 +16,8 @@ from sim import kernels
 from sim.coloring import color_order
 from sim.launch import Launcher, Replay
 from sim.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
-from sim.tethers import tethers
 from sim.state import float_array, int_array
+from sim.tethers import tethers
 
 wp = warp()
 
@@ -73,7 +73,8 @@ class XpbdSolver(Solver):
             "rest": model.spring_rest[sprung], "compliance": _compliance(model.spring_stiffness[sprung]),
             "anchors": model.spring_anchors[sprung],
         }, self.count, self.device, record)
-        pairs, limits = tethers(model, scale=settings.tether_scale) if settings.tethers else (np.zeros((0, 2), np.int64), np.zeros(0))
+        no_tethers = (np.zeros((0, 2), np.int64), np.zeros(0))
+        pairs, limits = tethers(model, scale=settings.tether_scale) if settings.tethers else no_tethers
         self.tethers = ColoredConstraints(pairs, {"limit": limits}, self.count, self.device, record)
         self.replay = Replay(self.device, record)
         kappa = hinge_stiffness(model)

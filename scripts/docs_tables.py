@@ -1,0 +1,103 @@
+"""The docs' generated tables: each is written from its source (a JSON in ``docs/data/``, or a
+declaration in the code) between markers in a Markdown file,
+
+    <!-- table: NAME (python scripts/docs_tables.py) -->
+    | ... |
+    <!-- /table -->
+
+so that a table cannot drift from the numbers it quotes: ``tests/test_docs_tables.py`` fails when
+one differs from what its source gives.
+
+    python scripts/docs_tables.py            # rewrite every table in place
+    python scripts/docs_tables.py --check    # exit 1 naming the tables that differ
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "docs" / "data"
+
+
+def _cell(value) -> str:
+    return str(value).replace("|", "\\|")
+
+
+def sim_settings() -> list[str]:
+    """Every darts-sim setting from its one declaration (``sim.settings.user_settings``)."""
+    from sim.settings import user_settings
+
+    rows = ["| setting (`SimSettings`) | darts-sim flag | batch `[sim]` key | default | what it does |", "|---|---|---|---|---|"]
+    for setting in user_settings():
+        rows.append(f"| `{setting.name}` | `{setting.flag}` | `{setting.key}` | {_cell(setting.default_text)} | "
+                    f"{_cell(setting.help)} |")
+    return rows
+
+
+def photo_outfits() -> list[str]:
+    """The development photographs read as outfits (``docs/data/photo_outfits.json``, written by
+    ``python scripts/photo_outfits.py``)."""
+    rows = ["| photograph | truth | read (probability) | sleeve end | hem end | between legs | right |",
+            "|---|---|---|---|---|---|---|"]
+    for row in json.loads((DATA / "photo_outfits.json").read_text())["rows"]:
+        read = ", ".join(f"{g['category']} ({100 * g['probability']:.0f} %)" for g in reversed(row["read"]))
+        attributes = {}
+        for garment in row["read"]:
+            attributes.update({k: v for k, v in garment["attributes"].items() if isinstance(v, (int, float))})
+        cells = ["–" if attributes.get(k) is None else f"{attributes[k]:.2f}"
+                 for k in ("sleeve_end", "hem_end", "between_legs_fill")]
+        truth = ", ".join(row["truth"]) + (" (ambiguous)" if row["ambiguous"] else "")
+        rows.append(f"| {row['file']} | {truth} | {read} | {' | '.join(cells)} | {'yes' if row['right'] else 'no'} |")
+    return rows
+
+
+#: table name -> (the Markdown file it lives in, the function that writes its rows)
+TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
+    "photo-outfits": ("docs/reconstruction.md", photo_outfits),
+}
+
+
+def _pattern(name: str) -> re.Pattern:
+    return re.compile(rf"(<!-- table: {re.escape(name)} [^\n]*-->\n)(.*?)(<!-- /table -->)", re.S)
+
+
+def rendered(name: str) -> tuple[Path, str, str]:
+    """(the file, its text now, its text with table ``name`` written from its source)."""
+    doc, rows = TABLES[name]
+    path = ROOT / doc
+    text = path.read_text()
+    pattern = _pattern(name)
+    if not pattern.search(text):
+        raise SystemExit(f"{doc}: no '<!-- table: {name} ... -->' marker")
+    return path, text, pattern.sub(lambda m: m.group(1) + "\n".join(rows()) + "\n" + m.group(3), text, count=1)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="only say which tables differ from their source")
+    parser.add_argument("names", nargs="*", metavar="NAME", help=f"the tables (default: all of {', '.join(TABLES)})")
+    args = parser.parse_args()
+    unknown = sorted(set(args.names) - set(TABLES))
+    if unknown:
+        parser.error(f"unknown table {', '.join(unknown)} (known: {', '.join(TABLES)})")
+    stale = []
+    for name in args.names or TABLES:
+        path, text, new = rendered(name)
+        if new != text:
+            stale.append(f"{path.relative_to(ROOT)}: table '{name}'")
+            if not args.check:
+                path.write_text(new)
+    if args.check and stale:
+        print("out of date (python scripts/docs_tables.py): " + "; ".join(stale), file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(ROOT))
+    raise SystemExit(main())
