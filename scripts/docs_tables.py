@@ -32,7 +32,8 @@ def sim_settings() -> list[str]:
     """Every darts-sim setting from its one declaration (``sim.settings.user_settings``)."""
     from sim.settings import user_settings
 
-    rows = ["| setting (`SimSettings`) | darts-sim flag | batch `[sim]` key | default | what it does |", "|---|---|---|---|---|"]
+    rows = ["| setting (`SimSettings`) | darts-sim flag | batch `[sim]` key | default | what the flag does |",
+            "|---|---|---|---|---|"]
     for setting in user_settings():
         rows.append(f"| `{setting.name}` | `{setting.flag}` | `{setting.key}` | {_cell(setting.default_text)} | "
                     f"{_cell(setting.help)} |")
@@ -58,6 +59,7 @@ def photo_outfits() -> list[str]:
 
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
+    "sim-settings": ("docs/simulation.md", sim_settings),
     "photo-outfits": ("docs/reconstruction.md", photo_outfits),
 }
 

@@ -21,7 +21,7 @@ from darts.cli.errors import OneLineParser, run_guarded
 from darts.dart.model import MATERIALS
 from darts.shipped import garment_help, motion_help
 from exporters.sequence import SEQUENCE_FORMATS
-from sim.settings import SimSettings
+from sim.settings import SimSettings, user_settings
 from sim.solvers import default_substeps, solver_names
 
 
@@ -49,18 +49,12 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", metavar="OUT", required=True,
                    help="OUT.usd/.usda/.usdc, or a directory for an OBJ/PLY sequence (see --format)")
     p.add_argument("--format", choices=SEQUENCE_FORMATS, default="obj", help="mesh sequence format (default obj)")
-    p.add_argument("--fps", type=float, default=30.0, help="simulation and output frame rate (default 30)")
     p.add_argument("--start", type=int, default=0, help="first motion frame, at --fps (default 0)")
     p.add_argument("--end", type=int, help="last motion frame, exclusive, at --fps (default: the end)")
     p.add_argument("--frames", type=int, help="number of frames from --start")
     p.add_argument("--settle", type=float, default=0.5,
                    help="seconds in which the body blends from its rest pose into the first frame (default 0.5)")
-    defaults = SimSettings()
-    p.add_argument("--solver", choices=solver_names(), default=defaults.solver, help=f"default {defaults.solver}")
-    p.add_argument("--substeps", type=int, default=None,
-                   help="substeps per frame (default: " + ", ".join(f"{k} {default_substeps(k)}" for k in solver_names()) + ")")
-    p.add_argument("--iterations", type=int, default=defaults.iterations, help="XPBD sweeps per substep (default 2)")
-    p.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
+    _add_settings(p)
     p.add_argument("--body", metavar="PATH", help="SMPL/SMPL-H/SMPL-X model file (default: the bundled body)")
     p.add_argument("--betas", type=float, nargs="+", metavar="B",
                    help="body shape to simulate on (default: the shape the DART was made for); the body changes "
@@ -68,22 +62,6 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--material", choices=sorted(MATERIALS), help="replace the garment's material")
     p.add_argument("--seam", action="append", default=[], metavar="NAME=REGIME[:STIFFNESS]",
                    help="seam regime (welded, stiff, loose, repulsive, partial); NAME 'all' sets every seam")
-    p.add_argument("--wind", type=_vector, default=(0.0, 0.0, 0.0), metavar="X,Y,Z", help="wind in m/s (world frame)")
-    p.add_argument("--gust", type=float, default=0.0, help="relative gust strength of the wind, 0..1")
-    p.add_argument("--no-ground", action="store_true", help="no ground plane at z = 0")
-    p.add_argument("--no-self-contact", action="store_true", help="let the garment pass through itself (faster)")
-    p.add_argument("--no-ccd", action="store_true",
-                   help="push particles inside the body out at the closest body point only, without tracing their "
-                        "path back to the face they entered by")
-    p.add_argument("--no-tethers", action="store_true",
-                   help="xpbd: without the long-range tethers that hold the garment's length over many edges at once "
-                        "(it then stretches and waistbands slide unless many more substeps are taken)")
-    p.add_argument("--no-crease", action="store_true",
-                   help="keep each particle off its closest body face only, not also off a second face within a "
-                        "thickness of where that push puts it (creases, where the body overlaps itself)")
-    p.add_argument("--max-speed", type=float, default=defaults.max_speed,
-                   help=f"m/s; a faster particle stops the run as unstable (default {defaults.max_speed:g})")
-    p.add_argument("--seed", type=int, default=0, help="seed of the wind gusts (runs are deterministic)")
     p.add_argument("--seam-curves", action="store_true", help="USD only: draw each seam pair as a curve")
     p.add_argument("--stats", metavar="stats.json", help="write per-frame measurements as JSON")
     p.add_argument("--preview", metavar="PREVIEW", help="also render preview.gif, .mp4 (needs ffmpeg) or .png "
@@ -92,15 +70,29 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+def _add_settings(p: argparse.ArgumentParser) -> None:
+    """A flag for every setting users set (``sim.settings.user_settings``: its declaration), its
+    value in the field's own name; a switch on by default turned off by its ``--no-...`` flag."""
+    for setting in user_settings():
+        if setting.kind == "bool":
+            p.add_argument(setting.flag, dest=setting.name, action="store_false" if setting.default else "store_true",
+                           help=setting.help)
+            continue
+        options = {"float": {"type": float}, "int": {"type": int}, "str": {},
+                   "vector": {"type": _vector, "metavar": "X,Y,Z"}}[setting.kind]
+        if setting.name == "solver":
+            options["choices"] = solver_names()
+        default = ", ".join(f"{k} {default_substeps(k)}" for k in solver_names()) if setting.name == "substeps" \
+            else setting.default_text
+        p.add_argument(setting.flag, dest=setting.name, default=setting.default, help=f"{setting.help} (default {default})",
+                       **options)
+
+
 def job_from_args(args):
     """The ``SimJob`` that parsed ``darts-sim`` arguments describe."""
     from sim.api import SimJob
 
-    settings = SimSettings(fps=args.fps, substeps=args.substeps, iterations=args.iterations, solver=args.solver,
-                           device=args.device, wind=args.wind, gust=args.gust, ground=not args.no_ground, seed=args.seed,
-                           max_speed=args.max_speed, self_contact=not args.no_self_contact,
-                           continuous_collision=not args.no_ccd, crease_contacts=not args.no_crease,
-                           tethers=not args.no_tethers)
+    settings = SimSettings(**{setting.name: getattr(args, setting.name) for setting in user_settings()})
     garment = args.garment[0] if len(args.garment) == 1 else list(args.garment)
     return SimJob(garment, args.motion, settings, start=args.start, end=args.end, frames=args.frames,
                   settle=args.settle, body=args.body, betas=args.betas, material=args.material, seams=tuple(args.seam),
@@ -108,27 +100,19 @@ def job_from_args(args):
                   preview=args.preview)
 
 
-#: SimSettings fields -> the darts-sim flag that sets them (an "off" flag for the booleans on by default).
-_SETTING_FLAGS = {"fps": "--fps", "substeps": "--substeps", "iterations": "--iterations", "solver": "--solver",
-                  "device": "--device", "wind": "--wind", "gust": "--gust", "max_speed": "--max-speed", "seed": "--seed",
-                  "ground": "--no-ground", "self_contact": "--no-self-contact", "continuous_collision": "--no-ccd",
-                  "crease_contacts": "--no-crease", "tethers": "--no-tethers"}
-
-
 def command_line(job) -> str:
     """The ``darts-sim`` command that runs ``job`` (for the record: ``darts batch`` runs jobs by the
     API); settings left at their defaults are left out."""
     garments = job.garment if isinstance(job.garment, (list, tuple)) else [job.garment]
     argv = [*(str(g) for g in garments), str(job.motion), "-o", str(job.output)]
-    defaults = SimSettings()
-    for name, flag in _SETTING_FLAGS.items():
-        value = getattr(job.settings, name)
-        if value == getattr(defaults, name):
+    for setting in user_settings():
+        value = getattr(job.settings, setting.name)
+        if value == setting.default:
             continue
-        if isinstance(value, bool):
-            argv += [flag]
+        if setting.kind == "bool":
+            argv += [setting.flag]  # the switch away from the default
         else:
-            argv += [flag, ",".join(f"{v:g}" for v in value) if isinstance(value, tuple) else f"{value}"]
+            argv += [setting.flag, ",".join(f"{v:g}" for v in value) if setting.kind == "vector" else f"{value}"]
     options = [("--start", job.start, 0), ("--end", job.end, None), ("--frames", job.frames, None),
                ("--settle", job.settle, 0.5), ("--body", job.body, None), ("--material", job.material, None),
                ("--format", job.format, "obj"), ("--stats", job.stats, None), ("--preview", job.preview, None)]

@@ -1,7 +1,14 @@
-"""Settings of a cloth simulation (SI units; vectors in the world frame, Z up)."""
+"""Settings of a cloth simulation (SI units; vectors in the world frame, Z up).
+
+``SimSettings`` is the one declaration of every setting. Those a user sets carry, in their field's
+metadata, a help line and (where it is not derived from the name) their ``darts-sim`` flag and
+batch key; ``user_settings()`` lists them, and the ``darts-sim`` parser (``sim.cli``), a batch
+spec's ``[sim]`` keys (``sim.batch.spec``) and the docs' settings table (``scripts/docs_tables.py``,
+``docs/simulation.md``) are all made from it. The others are the solver's tuning, set from Python.
+"""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -13,23 +20,29 @@ DEFAULT_SOLVER = "xpbd"
 CCD_MIN_PATH = 0.01
 
 
+def _user(default, help: str, flag: str | None = None, key: str | None = None):
+    """A field users set: ``flag`` defaults to ``--name`` with dashes (``--no-name`` for a switch on
+    by default), ``key`` (a batch spec's ``[sim]`` key) to the field's name."""
+    return field(default=default, metadata={"help": help, "flag": flag, "key": key})
+
+
 @dataclass
 class SimSettings:
     """How the solver steps; material-dependent values (thickness, friction) come from the DART."""
 
-    fps: float = 30.0
-    # per frame; None: the solver's own default (``Solver.default_substeps``), filled in by ``Simulation``
-    substeps: int | None = None
-    iterations: int = 2  # XPBD constraint sweeps per substep
-    solver: str = DEFAULT_SOLVER
-    device: str = "cpu"
+    fps: float = _user(30.0, "simulation and output frame rate, frames/s")
+    # per frame; None: the solver's own default, filled in by ``sim.solvers.resolved_settings``
+    substeps: int | None = _user(None, "substeps per frame")
+    iterations: int = _user(2, "XPBD constraint sweeps per substep")
+    solver: str = _user(DEFAULT_SOLVER, "the solver (sim.solvers' registry)")
+    device: str = _user("cpu", "Warp device: cpu or cuda[:N]")
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)  # m/s^2
-    wind: tuple[float, float, float] = (0.0, 0.0, 0.0)  # m/s
-    gust: float = 0.0  # relative amplitude of the wind's gusts, 0..1
+    wind: tuple[float, float, float] = _user((0.0, 0.0, 0.0), "wind in m/s (world frame, Z up)")
+    gust: float = _user(0.0, "relative gust strength of the wind, 0..1")
     air_density: float = 1.2  # kg/m^3; 0 switches wind and air drag off
     drag_coefficient: float = 1.0
     damping: float = 0.1  # 1/s, velocity decay rate
-    ground: bool = True  # the plane z = 0
+    ground: bool = _user(True, "no ground plane at z = 0")
     contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
     contact_interval: int = 1  # substeps between the body's closest-point searches
     contact_skin: float = 0.005  # m a particle moves (relative to its contact) before it is searched again; 0: always
@@ -44,19 +57,25 @@ class SimSettings:
     # garment's fast particles travel until the next search (``SelfContact.search``)
     self_contact_reach: float = 0.002
     max_body_speed: float = 5.0  # m/s the search reach allows for at least (more when the body is faster)
-    max_speed: float = 50.0  # m/s; faster means the run has blown up
+    max_speed: float = _user(50.0, "m/s; a faster particle stops the run as unstable")
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep
-    self_contact: bool = True  # the garment collides with itself
-    continuous_collision: bool = True  # a particle whose path entered the body goes back out that face
-    crease_contacts: bool = True  # a particle kept off a second body face within a thickness of its push
-    tethers: bool = True  # XPBD: long-range tethers (sim.tethers) hold stretch over many edges at once
+    self_contact: bool = _user(True, "let the garment pass through itself (faster)")
+    continuous_collision: bool = _user(
+        True, "push particles inside the body out at the closest body point only, without tracing their path back "
+              "to the face they entered by", flag="--no-ccd", key="ccd")
+    crease_contacts: bool = _user(
+        True, "keep each particle off its closest body face only, not also off a second face within a thickness of "
+              "where that push puts it (creases, where the body overlaps itself)", flag="--no-crease", key="crease")
+    tethers: bool = _user(
+        True, "xpbd: without the long-range tethers (sim.tethers) that hold the garment's length over many edges at "
+              "once (it then stretches and waistbands slide unless many more substeps are taken)")
     # XPBD: the surface tethers' limits times this (never under the rest chord); the graph path they are
     # measured on runs about 2 % over the surface distance, so a little under 1 lets them bind sooner
     tether_scale: float = 1.0
     # kernel launches recorded once and replayed, the XPBD sweeps as one captured block (``sim.launch``);
     # off: every launch through wp.launch from Python, as before issue 30 (the same results, slower)
     replay_launches: bool = True
-    seed: int = 0
+    seed: int = _user(0, "seed of the wind gusts (runs are deterministic)")
 
     def check(self) -> None:
         """Raise ValueError naming the first setting out of range (the solver's name is the
@@ -89,3 +108,44 @@ class SimSettings:
         for ok, message in rules:
             if not ok:
                 raise ValueError(message)
+
+
+@dataclass(frozen=True)
+class UserSetting:
+    """A setting users set (``SimSettings``' declaration): its field ``name``, value ``kind``
+    (float, int, str, bool, vector), ``default``, ``darts-sim`` ``flag``, batch ``key`` and ``help``.
+    A switch (bool) on by default is turned off by its ``--no-...`` flag."""
+
+    name: str
+    kind: str
+    default: object
+    flag: str
+    key: str
+    help: str
+
+    @property
+    def default_text(self) -> str:
+        if self.default is None:
+            return "the solver's"
+        if self.kind == "bool":
+            return "on" if self.default else "off"
+        if self.kind == "vector":
+            return ",".join(f"{v:g}" for v in self.default)
+        return f"{self.default:g}" if isinstance(self.default, float) else str(self.default)
+
+
+_KINDS = {"float": "float", "int": "int", "int | None": "int", "str": "str", "bool": "bool",
+          "tuple[float, float, float]": "vector"}
+
+
+def user_settings() -> list[UserSetting]:
+    """Every ``SimSettings`` field users set, in declaration order."""
+    found = []
+    for f in fields(SimSettings):
+        if "help" not in f.metadata:
+            continue
+        kind = _KINDS[str(f.type)]
+        dashed = f.name.replace("_", "-")
+        flag = f.metadata["flag"] or (f"--no-{dashed}" if kind == "bool" and f.default else f"--{dashed}")
+        found.append(UserSetting(f.name, kind, f.default, flag, f.metadata["key"] or f.name, f.metadata["help"]))
+    return found

@@ -24,18 +24,18 @@ from pathlib import Path
 from darts.errors import DartsInputError
 from darts.fileio import read_input
 from darts.jobs import Job, safe_id
+from sim.settings import user_settings
 
 #: SPEC sim keys -> (what they set: "settings" a SimSettings field, "job" a SimJob field, None the
 #: outputs; the field's name; the kind of value). A SPEC's bools set the field as they are.
-SIM_KEYS = {
-    "fps": ("settings", "fps", float), "frames": ("job", "frames", int), "start": ("job", "start", int),
-    "end": ("job", "end", int), "settle": ("job", "settle", float), "solver": ("settings", "solver", str),
-    "substeps": ("settings", "substeps", int), "iterations": ("settings", "iterations", int),
-    "device": ("settings", "device", str), "wind": ("settings", "wind", "vector"), "gust": ("settings", "gust", float),
-    "max_speed": ("settings", "max_speed", float), "seed": ("settings", "seed", int),
-    "ground": ("settings", "ground", bool), "self_contact": ("settings", "self_contact", bool),
-    "ccd": ("settings", "continuous_collision", bool), "crease": ("settings", "crease_contacts", bool),
-    "seam_curves": ("job", "seam_curves", bool), "format": (None, "format", str), "preview": (None, "preview", str),
+#: a spec's ``[sim]`` keys -> (where the value goes: the job's settings, the job, or neither (the
+#: outputs), the field it sets, its kind): every setting darts-sim has (``sim.settings.user_settings``),
+#: then the job's own
+SIM_KEYS = {setting.key: ("settings", setting.name, {"float": float, "int": int, "str": str, "bool": bool,
+                                                    "vector": "vector"}[setting.kind]) for setting in user_settings()} | {
+    "frames": ("job", "frames", int), "start": ("job", "start", int), "end": ("job", "end", int),
+    "settle": ("job", "settle", float), "seam_curves": ("job", "seam_curves", bool), "format": (None, "format", str),
+    "preview": (None, "preview", str),
 }
 FORMATS = ("usd", "usda", "usdc", "obj", "ply")
 PREVIEWS = ("gif", "png", "mp4")
