@@ -33,12 +33,12 @@ from darts.dart.io import load_dart
 from darts.geometry.warp_runtime import warp
 from darts.motion.amass import load_motion
 from darts.shipped import resolve_garment, resolve_motion
-from sim import kernels
 from sim.body_track import build_body_track
-from sim.model import cloth_model
+from sim.engine import kernels
+from sim.engine.model import cloth_model
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
 from sim.quality import edge_strain
-from sim.settings import SimSettings
-from sim.simulation import Simulation
 
 wp = warp()
 SUBSTEPS = 10  # Newton's substeps per frame

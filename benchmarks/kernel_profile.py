@@ -5,7 +5,7 @@
 The scene (default: the shipped short-sleeve top on the walk, default body, 30 fps, default
 settings) is stepped through its 0.5 s settle untimed, then ``--frames`` frames timed by CPU time
 (``time.process_time``, one core): first as users run it (the frame rate alone), then again from
-the start with every kernel launch (``sim.launch.Launcher``) and BVH refit timed on the host; the
+the start with every kernel launch (``sim.engine.launch.Launcher``) and BVH refit timed on the host; the
 sweeps a default step replays as one captured block run launch by launch there, so that each of
 their kernels is seen; each launch's time includes the 2-3 µs of replaying a recorded launch from
 Python. Prints ms per frame and launches per frame, largest first; the rest of the frame (Python,
@@ -24,11 +24,11 @@ from darts.dart.io import load_dart
 from darts.geometry.warp_runtime import warp
 from darts.motion.amass import load_motion
 from darts.shipped import resolve_garment, resolve_motion
-from sim import launch
 from sim.body_track import build_body_track
-from sim.model import cloth_model
-from sim.settings import SimSettings
-from sim.simulation import Simulation
+from sim.engine import launch
+from sim.engine.model import cloth_model
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
 
 wp = warp()
 

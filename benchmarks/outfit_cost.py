@@ -30,10 +30,10 @@ def _outfits() -> dict[str, list[str]]:
 def measure(garments: list[str], frames: int) -> dict:
     import darts
     from sim.body_track import build_body_track
-    from sim.model import cloth_model
+    from sim.engine.model import cloth_model
+    from sim.engine.settings import SimSettings
+    from sim.engine.simulation import Simulation
     from sim.outfit import covering_offsets, layer_order, outfit_model
-    from sim.settings import SimSettings
-    from sim.simulation import Simulation
 
     body, settings = darts.load_body(), SimSettings()
     track = build_body_track(body, darts.load_motion("walk"), settings.fps, 0.5)

@@ -27,9 +27,9 @@ from darts.geometry.warp_runtime import warp
 from darts.motion.amass import load_motion
 from darts.shipped import resolve_motion
 from sim.body_track import build_body_track
-from sim.model import cloth_model
-from sim.settings import SimSettings
-from sim.simulation import Simulation
+from sim.engine.model import cloth_model
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
 
 wp = warp()
 CACHE = Path(__file__).resolve().parent / ".cache"

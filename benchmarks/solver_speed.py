@@ -37,10 +37,10 @@ from darts.dart.io import load_dart
 from darts.motion.amass import load_motion
 from darts.shipped import resolve_garment, resolve_motion
 from sim.body_track import build_body_track
-from sim.model import cloth_model
+from sim.engine.model import cloth_model
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
 from sim.quality import edge_strain
-from sim.settings import SimSettings
-from sim.simulation import Simulation
 
 #: The scenes of issue 30: the 6k top on the walk, a skirt and pants on the walk and the squat.
 SCENES = ("short-sleeve-top:walk", "short-skirt:walk", "short-skirt:squat", "long-pants:walk", "long-pants:squat")

@@ -21,6 +21,8 @@ def lazy_exports(package: str, exports: dict[str, str], subpackages: tuple[str, 
             return import_module(f"{package}.{name}")
         raise AttributeError(f"module '{package}' has no attribute '{name}'")
 
+    __getattr__.exports = dict(exports)  # name -> module, for tools that follow the lazy names
+
     def __dir__() -> list[str]:
         dunders = (name for name in vars(sys.modules[package]) if name.startswith("__"))
         return sorted({*public, *subpackages, *dunders})

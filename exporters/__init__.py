@@ -1,1 +1,1 @@
-"""Exporters of simulation results: USD first, then OBJ/PLY sequences and previews. In progress."""
+"""Exporters of simulation results: animated USD (``usd``) and OBJ/PLY frame sequences (``sequence``)."""

@@ -29,8 +29,8 @@ def _cell(value) -> str:
 
 
 def sim_settings() -> list[str]:
-    """Every darts-sim setting from its one declaration (``sim.settings.user_settings``)."""
-    from sim.settings import user_settings
+    """Every darts-sim setting from its one declaration (``sim.engine.settings.user_settings``)."""
+    from sim.engine.settings import user_settings
 
     rows = ["| setting (`SimSettings`) | darts-sim flag | batch `[sim]` key | default | what the flag does |",
             "|---|---|---|---|---|"]

@@ -92,8 +92,8 @@ def simulation_figure(out: Path, scenes: list[tuple[str, str]], times: list[floa
     from darts.dart.io import load_dart
     from scenes import GARMENTS_DIR
     from sim.body_track import build_body_track
+    from sim.engine.settings import SimSettings
     from sim.run import simulate
-    from sim.settings import SimSettings
 
     body = load_body()
     fig, axes = plt.subplots(len(scenes), len(times), figsize=(2.4 * len(times), 3.0 * len(scenes)))

@@ -31,8 +31,8 @@ def run_one(job: tuple[str, str, str]) -> dict:
     from darts.motion.amass import load_motion
     from scenes import GARMENTS_DIR, MOTIONS_DIR
     from sim.body_track import build_body_track
+    from sim.engine.settings import SimSettings
     from sim.run import simulate, summary
-    from sim.settings import SimSettings
 
     garment, motion, regime = job
     dart = load_dart(GARMENTS_DIR / f"{garment}.npz")

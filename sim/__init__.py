@@ -6,4 +6,4 @@ use, so ``import sim`` costs nothing until one is asked for.
 from darts.lazy import lazy_exports as _lazy_exports
 
 __getattr__, __dir__, __all__ = _lazy_exports(__name__, {
-    "simulate": "api", "run_job": "api", "SimJob": "api", "Simulated": "api", "SimSettings": "settings"})
+    "simulate": "api", "run_job": "api", "SimJob": "api", "Simulated": "api", "SimSettings": "engine.settings"})

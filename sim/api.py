@@ -20,8 +20,8 @@ from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
 from exporters.sequence import SEQUENCE_FORMATS
 from exporters.usd import USD_SUFFIXES
-from sim.settings import SimSettings
-from sim.solvers import resolved_settings
+from sim.engine.settings import SimSettings
+from sim.engine.solvers import resolved_settings
 
 #: Exit code of an unstable run (its frames before the blow-up are kept).
 UNSTABLE_EXIT = 3
@@ -61,7 +61,7 @@ class SimJob:
     winding: bool | None = None
 
     def check(self) -> SimSettings:
-        """The settings resolved (``sim.solvers.resolved_settings``) after every value of the job is
+        """The settings resolved (``sim.engine.solvers.resolved_settings``) after every value of the job is
         checked; DartsInputError naming the first bad one, and every output checked writable."""
         try:
             settings = resolved_settings(self.settings)

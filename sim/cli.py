@@ -21,8 +21,8 @@ from darts.cli.errors import OneLineParser, run_guarded
 from darts.dart.model import MATERIALS
 from darts.shipped import garment_help, motion_help
 from exporters.sequence import SEQUENCE_FORMATS
-from sim.settings import SimSettings, user_settings
-from sim.solvers import default_substeps, solver_names
+from sim.engine.settings import SimSettings, user_settings
+from sim.engine.solvers import default_substeps, solver_names
 
 
 def _vector(text: str) -> tuple[float, float, float]:
@@ -71,7 +71,7 @@ def parser() -> argparse.ArgumentParser:
 
 
 def _add_settings(p: argparse.ArgumentParser) -> None:
-    """A flag for every setting users set (``sim.settings.user_settings``: its declaration), its
+    """A flag for every setting users set (``sim.engine.settings.user_settings``: its declaration), its
     value in the field's own name; a switch on by default turned off by its ``--no-...`` flag."""
     for setting in user_settings():
         if setting.kind == "bool":

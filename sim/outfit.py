@@ -3,7 +3,7 @@
 The garments become one ``ClothModel``: their particles, constraints and loops side by side (each
 garment's indices shifted past the ones before), each edge and hinge with its own garment's
 stiffness, each particle with its layer. Self-contact then covers garment against garment as well
-as each garment against itself: ``sim.solvers.base.exclusion_rest`` moves every layer far from the
+as each garment against itself: ``sim.engine.solvers.base.exclusion_rest`` moves every layer far from the
 others when it tells rest neighbours apart, so two garments lying on each other always collide.
 Thickness and friction are one per model: the outfit takes the largest of its garments'.
 
@@ -23,7 +23,7 @@ import numpy as np
 
 from darts.dart.model import Dart
 from darts.errors import DartsInputError
-from sim.model import ClothModel, cloth_model, dihedral_angles
+from sim.engine.model import ClothModel, cloth_model, dihedral_angles
 
 #: metres from an inner garment within which an outer particle counts as covering it
 COVER = 0.03
@@ -259,7 +259,7 @@ def edges_through(points: np.ndarray, faces: np.ndarray, edges: np.ndarray) -> n
     """Mask [E]: which segments ``edges`` [E,2] (indices into ``points`` [N,3]) pass through a
     triangle ``faces`` [F,3] (``kernels.edges_through_mesh``)."""
     from darts.geometry.warp_runtime import warp
-    from sim import kernels
+    from sim.engine import kernels
 
     wp = warp()
     x = wp.array(np.ascontiguousarray(points, np.float32), dtype=wp.vec3)

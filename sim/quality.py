@@ -1,7 +1,7 @@
 """What a user checks a simulated garment by, per frame: edge strain and how far a waistband slid.
 
 Strain is measured on the solver's particles and edges (the DART's edges after welded seams are
-merged and very short edges collapsed, ``sim.model.cloth_model``): per edge s = max(l / l0 - 1, 0),
+merged and very short edges collapsed, ``sim.engine.model.cloth_model``): per edge s = max(l / l0 - 1, 0),
 stretch only (a compressed edge is a fold, not a defect). The waist slide of a skirt or pants is the
 height of its waist loop's centroid above the pelvis joint (world Z up, metres), compared with its
 height at the first recorded frame (the settled place): a positive slide is the waist below where it
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from darts.dart.model import Dart
-from sim.model import ClothModel
+from sim.engine.model import ClothModel
 
 #: The feature line whose slide is measured, for garments held up at the waist.
 WAIST_LINE = "waist"

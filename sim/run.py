@@ -17,11 +17,11 @@ import numpy as np
 
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
-from sim.model import ClothModel, cloth_model
+from sim.engine.model import ClothModel, cloth_model
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
 from sim.outfit import Outfit, covering_offsets, layer_crossings, layer_order
 from sim.quality import edge_strain, strain_summary, waist_height
-from sim.settings import SimSettings
-from sim.simulation import Simulation
 
 
 @dataclass

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim.model import cloth_model
-from sim.settings import SimSettings
-from sim.simulation import Simulation
+from sim.engine.model import cloth_model
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
 from tests.helpers import sheet_dart
 
 SPEED = 10.0  # m/s, downwards: 3.3 cm a substep at 30 fps x 10 substeps

@@ -169,8 +169,8 @@ def test_a_lengthened_widened_skirt_stays_outside_the_legs(body, coarse_skirt):
     from darts.motion.amass import load_motion
     from darts.shipped import resolve_motion
     from sim.body_track import build_body_track
+    from sim.engine.settings import SimSettings
     from sim.run import simulate
-    from sim.settings import SimSettings
 
     track = build_body_track(body, load_motion(resolve_motion("walk")), 30.0, 0.5)
     track.vertices = track.vertices[:track.settle_frames + 10]

@@ -1,11 +1,11 @@
-"""Recorded launches (sim.launch.Launcher) run a kernel exactly as wp.launch does: the arrays they
+"""Recorded launches (sim.engine.launch.Launcher) run a kernel exactly as wp.launch does: the arrays they
 were recorded with, and scalar arguments that change between calls."""
 from __future__ import annotations
 
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim.launch import Launcher, Replay
+from sim.engine.launch import Launcher, Replay
 
 wp = warp()
 
@@ -66,9 +66,9 @@ def test_captured_sweeps_step_exactly_as_direct_ones():
     ``wp.launch`` calls (``replay_launches`` off), also after a change of the host values they
     launch with (edge-edge contacts off, other
     friction between layers), which makes new captures."""
-    from sim.model import cloth_model
-    from sim.settings import SimSettings
-    from sim.simulation import Simulation
+    from sim.engine.model import cloth_model
+    from sim.engine.settings import SimSettings
+    from sim.engine.simulation import Simulation
     from tests.helpers import sheet_dart
     from tests.test_self_contact import FAR_BODY, folded_sheet
 

@@ -9,11 +9,11 @@ import pytest
 from scipy.spatial import cKDTree
 
 from darts.errors import DartsInputError
+from sim.engine.self_contact import SelfContact
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
+from sim.engine.solvers.base import exclusion_rest
 from sim.outfit import LAYER_GAP, closed_surface, layer_crossings, layer_order, loop_cap, outfit_model
-from sim.self_contact import SelfContact
-from sim.settings import SimSettings
-from sim.simulation import Simulation
-from sim.solvers.base import exclusion_rest
 from tests.helpers import sheet_dart
 
 SIDE = 0.2  # m, the sheets' side

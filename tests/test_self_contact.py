@@ -6,10 +6,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from darts.geometry.warp_runtime import warp
-from sim.model import cloth_model
-from sim.self_contact import SelfContact
-from sim.settings import SimSettings
-from sim.simulation import Simulation
+from sim.engine.model import cloth_model
+from sim.engine.self_contact import SelfContact
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
 from tests.helpers import sheet_dart
 
 wp = warp()
@@ -301,7 +301,7 @@ def test_side_carries_to_a_neighbouring_triangle_of_a_smooth_layer():
 def test_edge_faces_gives_each_edge_a_triangle_that_has_it():
     """The triangle an edge's known side is read from (outfits): one that has both its ends, in
     either order; -1 for a pair that is no triangle's edge."""
-    from sim.self_contact import edge_faces
+    from sim.engine.self_contact import edge_faces
 
     faces = np.array([[0, 1, 2], [2, 1, 3]])
     edges = np.array([[1, 0], [1, 2], [3, 2], [0, 3]])

@@ -1,4 +1,4 @@
-"""Every simulator setting users set is declared once (``sim.settings.SimSettings``' field metadata)
+"""Every simulator setting users set is declared once (``sim.engine.settings.SimSettings``' field metadata)
 and reachable the same way from the three places that set it: a darts-sim flag, a batch spec's
 ``[sim]`` key and the Python API; a job's command line gives the job back."""
 from __future__ import annotations
@@ -10,7 +10,7 @@ import pytest
 
 from sim.batch.spec import SIM_KEYS, Body, SeamSet, sim_job
 from sim.cli import command_line, job_from_args, parser
-from sim.settings import SimSettings, user_settings
+from sim.engine.settings import SimSettings, user_settings
 
 SETTINGS = user_settings()
 

@@ -11,12 +11,12 @@ from darts.geometry.warp_runtime import warp
 from darts.motion.amass import load_motion
 from darts.shipped import shipped_motions
 from scenes import GARMENTS_DIR, MOTIONS_DIR
-from sim import kernels
 from sim.body_track import build_body_track
-from sim.model import cloth_model, dihedral_angles
+from sim.engine import kernels
+from sim.engine.model import cloth_model, dihedral_angles
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
 from sim.run import simulate
-from sim.settings import SimSettings
-from sim.simulation import Simulation
 
 wp = warp()
 MM = 1e-3

@@ -8,7 +8,7 @@ import pytest
 
 from darts.dart.io import load_dart
 from darts.geometry.mesh import edge_manifold
-from sim.model import SHORT_EDGE_FRACTION, cloth_model, dihedral_angles
+from sim.engine.model import SHORT_EDGE_FRACTION, cloth_model, dihedral_angles
 
 GARMENTS = Path(__file__).parents[1] / "scenes" / "garments"
 

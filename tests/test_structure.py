@@ -50,6 +50,38 @@ def test_darts_never_imports_the_simulator_or_the_exporters_and_scenes_is_data()
             assert not roots & set(PACKAGES) - {"scenes"}, f"{module} imports {roots & set(PACKAGES)}"
 
 
+def _resolved(name: str) -> str:
+    """``name`` (an imported ``package.attribute``) as the module it comes from: a package's lazily
+    exported name (``sim.SimSettings``) is its module's (``sim.engine.settings``)."""
+    from importlib import import_module
+
+    package, _, attribute = name.rpartition(".")
+    if package in _modules():
+        exports = getattr(getattr(import_module(package), "__getattr__", None), "exports", {})
+        if attribute in exports:
+            return f"{package}.{exports[attribute]}"
+    return name
+
+
+def test_the_simulators_engine_sits_below_its_application():
+    """sim.engine (model, state, settings, collider, self-contact, solvers, launches, the frame
+    loop) imports nothing of the application above it (sim.api, run, outfit, cli, batch, dataset
+    ...), lazily exported names followed; the exporters never import the simulator."""
+    modules = _modules()
+    for module, path in modules.items():
+        names = {_resolved(name) for name in _imports(path, module, top_level_only=False)}
+        if module.startswith("sim.engine"):
+            upward = {n for n in names if n.split(".")[0] == "sim" and n != "sim" and not n.startswith("sim.engine")}
+            assert not upward, f"{module} (engine) imports the application: {sorted(upward)}"
+        if module.split(".")[0] == "exporters":
+            assert not {n for n in names if n.split(".")[0] == "sim"}, f"{module} imports the simulator"
+
+
+def test_the_layer_check_follows_lazy_names():
+    assert _resolved("sim.SimSettings") == "sim.engine.settings" and _resolved("sim.simulate") == "sim.api"
+    assert _resolved("darts.load_body") == "darts.api" and _resolved("sim.engine.model") == "sim.engine.model"
+
+
 def test_no_import_circle_among_our_modules():
     """Imports inside functions count too: a circle closed lazily is still a circle."""
     modules = _modules()

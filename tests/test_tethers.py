@@ -1,4 +1,4 @@
-"""Long-range tethers (sim.tethers) and what they buy the default XPBD solver: a cloth hanging
+"""Long-range tethers (sim.engine.tethers) and what they buy the default XPBD solver: a cloth hanging
 over a bar stays at its length where plain XPBD stretches, and a waistband on a cone-shaped hip
 holds its place; tethers never resist folding or an isometric motion of the rest shape."""
 from __future__ import annotations
@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from sim.model import cloth_model
-from sim.settings import SimSettings
-from sim.simulation import Simulation
-from sim.tethers import loop_tethers, surface_tethers, tethers
+from sim.engine.model import cloth_model
+from sim.engine.settings import SimSettings
+from sim.engine.simulation import Simulation
+from sim.engine.tethers import loop_tethers, surface_tethers, tethers
 from tests.helpers import sheet_dart
 
 BAR_RADIUS = 0.03  # m

@@ -24,12 +24,12 @@ from pathlib import Path
 from darts.errors import DartsInputError
 from darts.fileio import read_input
 from darts.jobs import Job, safe_id
-from sim.settings import user_settings
+from sim.engine.settings import user_settings
 
 #: SPEC sim keys -> (what they set: "settings" a SimSettings field, "job" a SimJob field, None the
 #: outputs; the field's name; the kind of value). A SPEC's bools set the field as they are.
 #: a spec's ``[sim]`` keys -> (where the value goes: the job's settings, the job, or neither (the
-#: outputs), the field it sets, its kind): every setting darts-sim has (``sim.settings.user_settings``),
+#: outputs), the field it sets, its kind): every setting darts-sim has (``sim.engine.settings.user_settings``),
 #: then the job's own
 SIM_KEYS = {setting.key: ("settings", setting.name, {"float": float, "int": int, "str": str, "bool": bool,
                                                     "vector": "vector"}[setting.kind]) for setting in user_settings()} | {
@@ -187,7 +187,7 @@ def sim_job(garment: str, motion: str, body: Body, material: str | None, seams: 
     """The ``SimJob`` of one SPEC job, its outputs in JOB_FOLDER (``stats.json`` always; ``sim.usdc``
     or the format's; ``preview.<kind>`` when asked)."""
     from sim.api import SimJob
-    from sim.settings import SimSettings
+    from sim.engine.settings import SimSettings
 
     form = sim.get("format", "usdc")
     settings, options = {}, {}

@@ -14,8 +14,8 @@ import numpy as np
 from darts.body.model import BodyModel
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
+from sim.engine.settings import SimSettings
 from sim.run import simulate
-from sim.settings import SimSettings
 
 #: The solver that holds each family today (docs/simulation.md, "Known limits"): XPBD lets
 #: waistbands creep down the hips, the implicit mass-spring solver holds them.

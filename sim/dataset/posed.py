@@ -103,8 +103,8 @@ def make_posed_garment(job: Job, folder: Path) -> dict:
     from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
     from sim.body_track import build_body_track
     from sim.dataset.drape import DRAPE_SOLVER
+    from sim.engine.settings import SimSettings
     from sim.run import simulate
-    from sim.settings import SimSettings
 
     recipe = garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]))
     family = CATEGORIES[recipe.category].family

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim import kernels
-from sim.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
+from sim.engine import kernels
+from sim.engine.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
 
 wp = warp()
 

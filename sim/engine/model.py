@@ -9,7 +9,7 @@
 - seam springs: one per *active* pair of a stiff, loose, repulsive or partial seam, with that
   seam's stiffness (N/m) and rest length (0, or > 0 when repulsive); each end has an anchor, a
   neighbour off every seam, which says which way the end retreats when coincident ends must part;
-- loops: each feature line as a loop of particles (for ``sim.tethers``);
+- loops: each feature line as a loop of particles (for ``sim.engine.tethers``);
 - per constraint, the material's values (stretch stiffness per edge, bending stiffness per hinge)
   and per particle its layer (the garment it belongs to: 0 for one garment; ``sim.outfit`` joins
   several garments into one model, inner first).

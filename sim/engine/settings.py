@@ -31,10 +31,10 @@ class SimSettings:
     """How the solver steps; material-dependent values (thickness, friction) come from the DART."""
 
     fps: float = _user(30.0, "simulation and output frame rate, frames/s")
-    # per frame; None: the solver's own default, filled in by ``sim.solvers.resolved_settings``
+    # per frame; None: the solver's own default, filled in by ``sim.engine.solvers.resolved_settings``
     substeps: int | None = _user(None, "substeps per frame")
     iterations: int = _user(2, "XPBD constraint sweeps per substep")
-    solver: str = _user(DEFAULT_SOLVER, "the solver (sim.solvers' registry)")
+    solver: str = _user(DEFAULT_SOLVER, "the solver (sim.engine.solvers' registry)")
     device: str = _user("cpu", "Warp device: cpu or cuda[:N]")
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)  # m/s^2
     wind: tuple[float, float, float] = _user((0.0, 0.0, 0.0), "wind in m/s (world frame, Z up)")
@@ -67,19 +67,19 @@ class SimSettings:
         True, "keep each particle off its closest body face only, not also off a second face within a thickness of "
               "where that push puts it (creases, where the body overlaps itself)", flag="--no-crease", key="crease")
     tethers: bool = _user(
-        True, "xpbd: without the long-range tethers (sim.tethers) that hold the garment's length over many edges at "
+        True, "xpbd: without the long-range tethers (sim.engine.tethers) that hold the garment's length over many edges at "
               "once (it then stretches and waistbands slide unless many more substeps are taken)")
     # XPBD: the surface tethers' limits times this (never under the rest chord); the graph path they are
     # measured on runs about 2 % over the surface distance, so a little under 1 lets them bind sooner
     tether_scale: float = 1.0
-    # kernel launches recorded once and replayed, the XPBD sweeps as one captured block (``sim.launch``);
+    # kernel launches recorded once and replayed, the XPBD sweeps as one captured block (``sim.engine.launch``);
     # off: every launch through wp.launch from Python, as before issue 30 (the same results, slower)
     replay_launches: bool = True
     seed: int = _user(0, "seed of the wind gusts (runs are deterministic)")
 
     def check(self) -> None:
         """Raise ValueError naming the first setting out of range (the solver's name is the
-        registry's to check: ``sim.solvers.solver_class``)."""
+        registry's to check: ``sim.engine.solvers.solver_class``)."""
         finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
                                                self.damping, self.contact_reach, self.self_contact_reach,
                                                self.self_contact_list_reach, self.contact_skin, self.tether_scale,

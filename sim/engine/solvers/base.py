@@ -11,14 +11,14 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim import kernels
-from sim.collider import BodyCollider
-from sim.launch import Launcher
-from sim.model import ClothModel
-from sim.self_contact import SelfContact
-from sim.settings import SimSettings
-from sim.state import ClothState, float_array, int_array
-from sim.wind import Wind
+from sim.engine import kernels
+from sim.engine.collider import BodyCollider
+from sim.engine.launch import Launcher
+from sim.engine.model import ClothModel
+from sim.engine.self_contact import SelfContact
+from sim.engine.settings import SimSettings
+from sim.engine.state import ClothState, float_array, int_array
+from sim.engine.wind import Wind
 
 wp = warp()
 

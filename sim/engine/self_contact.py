@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim.launch import Launcher
+from sim.engine.launch import Launcher
 
 wp = warp()
 
@@ -624,7 +624,7 @@ class SelfContact:
                          self.partner_st, self.partner_side])
 
     def launch_key(self) -> tuple:
-        """The host values ``resolve`` and ``friction`` launch with (for ``sim.launch.Replay``)."""
+        """The host values ``resolve`` and ``friction`` launch with (for ``sim.engine.launch.Replay``)."""
         return self.separation, self.reach, self.edge_edge, self.friction_coefficient, self.layered
 
     def resolve(self, inverse_mass, body_push) -> None:

@@ -1,9 +1,9 @@
 """XPBD with small steps (Macklin et al. 2016, 2019): many substeps, few constraint sweeps each.
 
 Per substep: v += dt (g + f/m); predict x; place the body; then ``iterations`` Gauss-Seidel sweeps
-over the long-range tethers (``sim.tethers``, unless ``settings.tethers`` is off), edge stretch,
+over the long-range tethers (``sim.engine.tethers``, unless ``settings.tethers`` is off), edge stretch,
 contacts, then seam springs, after one bending sweep; v = dx / dt. The sweeps and the velocity
-update, the same launches every substep, run as one captured block (``sim.launch.Replay``).
+update, the same launches every substep, run as one captured block (``sim.engine.launch.Replay``).
 Compliance is 1 / stiffness: edges use the material's stretch stiffness (N/m), seam springs their
 seam's stiffness, hinges kappa from ``hinge_stiffness``.
 """
@@ -12,12 +12,12 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim import kernels
-from sim.coloring import color_order
-from sim.launch import Launcher, Replay
-from sim.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
-from sim.state import float_array, int_array
-from sim.tethers import tethers
+from sim.engine import kernels
+from sim.engine.coloring import color_order
+from sim.engine.launch import Launcher, Replay
+from sim.engine.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
+from sim.engine.state import float_array, int_array
+from sim.engine.tethers import tethers
 
 wp = warp()
 

@@ -27,7 +27,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from darts.geometry.mesh import vertex_normals
-from sim.model import ClothModel
+from sim.engine.model import ClothModel
 
 #: Surface-tether radii in median edge lengths: a near ring and a far one.
 LEVELS = (4, 12)

@@ -12,12 +12,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim import kernels
-from sim.collider import BodyCollider
-from sim.model import ClothModel
-from sim.settings import SimSettings
-from sim.solvers import resolved_settings, solver_class
-from sim.state import ClothState
+from sim.engine import kernels
+from sim.engine.collider import BodyCollider
+from sim.engine.model import ClothModel
+from sim.engine.settings import SimSettings
+from sim.engine.solvers import resolved_settings, solver_class
+from sim.engine.state import ClothState
 
 wp = warp()
 

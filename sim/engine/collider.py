@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim import kernels
-from sim.launch import Launcher
-from sim.settings import CCD_MIN_PATH, SimSettings
-from sim.state import int_array, vec3_array
+from sim.engine import kernels
+from sim.engine.launch import Launcher
+from sim.engine.settings import CCD_MIN_PATH, SimSettings
+from sim.engine.state import int_array, vec3_array
 
 wp = warp()
 
@@ -128,7 +128,7 @@ class BodyCollider:
                      int(self.settings.ground), 0.0, self.body_push, self.ground_push])
 
     def launch_key(self) -> tuple:
-        """The host values ``resolve`` and ``friction`` launch with (for ``sim.launch.Replay``)."""
+        """The host values ``resolve`` and ``friction`` launch with (for ``sim.engine.launch.Replay``)."""
         return self.thickness, self.settings.ground, self.friction_coefficient
 
     def friction(self, x, x_start, dt: float) -> None:
