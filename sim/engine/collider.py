@@ -3,8 +3,8 @@
 World frame (Z up, metres, seconds). Per frame the body moves linearly from its previous vertices
 to the next ones; every substep places it. Every ``contact_interval`` substeps its BVH is refit and
 each particle's closest body point searched (with the continuous test and crease contacts of
-``kernels.find_contacts``); in between, each contact plane follows its body face
-(``kernels.track_contacts``). ``resolve`` pushes particles a thickness outside those planes and above
+``collider_kernels.find_contacts``); in between, each contact plane follows its body face
+(``collider_kernels.track_contacts``). ``resolve`` pushes particles a thickness outside those planes and above
 the ground; ``friction`` turns the pushes of a substep into Coulomb friction.
 """
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim.engine import kernels
+from sim.engine import collider_kernels
 from sim.engine.launch import Launcher
 from sim.engine.settings import CCD_MIN_PATH, SimSettings
 from sim.engine.state import int_array, vec3_array
@@ -86,7 +86,7 @@ class BodyCollider:
 
     def place(self, weight: float, refit: bool = True) -> None:
         """Body at ``weight`` of the way through the current frame (its BVH refit if ``refit``)."""
-        self.launch(kernels.body_frame, len(self.points),
+        self.launch(collider_kernels.body_frame, len(self.points),
                     [self.start, self.end, weight, self.settings.fps, self.points, self.velocities])
         if refit:
             self.mesh.refit()
@@ -107,7 +107,7 @@ class BodyCollider:
             reach = (self.thickness + self.max_offset + settings.contact_reach + settings.contact_skin
                      + interval * dt * self.speed)
             started = self.time + substep * dt
-            self.launch(kernels.find_contacts, self.count,
+            self.launch(collider_kernels.find_contacts, self.count,
                         [self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
                          CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start,
                          settings.contact_skin, self.speed, self.query_time, self.query_offset, self.contact.face,
@@ -115,7 +115,7 @@ class BodyCollider:
                          self.second.uv, self.second.local])
             self.window_time = started
         c, s = self.contact, self.second
-        self.launch(kernels.track_contacts, self.count,
+        self.launch(collider_kernels.track_contacts, self.count,
                     [self.mesh.id, c.face, c.uv, c.local, c.point, c.normal, c.velocity, s.face, s.uv, s.local,
                      s.point, s.normal, s.velocity])
 
@@ -123,7 +123,7 @@ class BodyCollider:
         """Push particles ``thickness`` outside their contact planes (both, in a crease) and above the
         ground, which has the last word; the pushes add up for ``friction``."""
         c, s = self.contact, self.second
-        self.launch(kernels.resolve_contacts, self.count,
+        self.launch(collider_kernels.resolve_contacts, self.count,
                     [x, c.point, c.normal, c.face, s.point, s.normal, s.face, self.thickness, self.offset,
                      int(self.settings.ground), 0.0, self.body_push, self.ground_push])
 
@@ -133,7 +133,7 @@ class BodyCollider:
 
     def friction(self, x, x_start, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""
-        self.launch(kernels.apply_friction, self.count,
+        self.launch(collider_kernels.apply_friction, self.count,
                     [x, x_start, self.contact.normal, self.contact.velocity, self.second.normal,
                      self.second.face, self.friction_coefficient, dt, self.body_push, self.ground_push])
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.warp_runtime import warp
-from sim.engine import kernels
 from sim.engine.coloring import color_order
 from sim.engine.launch import Launcher, Replay
+from sim.engine.solvers import xpbd_kernels
 from sim.engine.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
 from sim.engine.state import float_array, int_array
 from sim.engine.tethers import tethers
@@ -86,7 +86,7 @@ class XpbdSolver(Solver):
 
     def step(self, state_in, state_out, collider, dt, time, substep):
         self.external_forces(state_in, time)
-        self.launch(kernels.predict, self.count, [state_in.x, state_in.v, self.force, self.inverse_mass,
+        self.launch(xpbd_kernels.predict, self.count, [state_in.x, state_in.v, self.force, self.inverse_mass,
                                                   wp.vec3(*self.settings.gravity), dt, self.damping, state_out.x,
                                                   state_out.v])
         self.find_contacts(state_in, state_out, collider, dt, substep)
@@ -103,16 +103,16 @@ class XpbdSolver(Solver):
             group.multiplier.zero_()
         if bend:  # its compliance spread over the interval
             b = self.bending.fields
-            self.bending.launch(kernels.solve_bending, [b["rest_cos"], b["rest_sin"], b["compliance"]],
+            self.bending.launch(xpbd_kernels.solve_bending, [b["rest_cos"], b["rest_sin"], b["compliance"]],
                                 [self.inverse_mass, dt * self.settings.bending_interval, self.bending.multiplier, x])
         t, d, seam = self.tethers.fields, self.stretch.fields, self.seams.fields
         for _ in range(self.settings.iterations):
-            self.tethers.launch(kernels.solve_max_distances, [t["limit"]], [self.inverse_mass, x])
-            self.stretch.launch(kernels.solve_distances, [d["rest"], d["compliance"], d["anchors"]],
+            self.tethers.launch(xpbd_kernels.solve_max_distances, [t["limit"]], [self.inverse_mass, x])
+            self.stretch.launch(xpbd_kernels.solve_distances, [d["rest"], d["compliance"], d["anchors"]],
                                 [self.inverse_mass, dt, self.stretch.multiplier, x])
             self.resolve_contacts(state_out, collider)
             # Seams last: Gauss-Seidel favours the last sweep, and a seam squeezed between two layers
             # or two body parts (an armpit) is otherwise pulled open by their contacts.
-            self.seams.launch(kernels.solve_distances, [seam["rest"], seam["compliance"], seam["anchors"]],
+            self.seams.launch(xpbd_kernels.solve_distances, [seam["rest"], seam["compliance"], seam["anchors"]],
                               [self.inverse_mass, dt, self.seams.multiplier, x])
         self.finish(state_in, state_out, collider, dt)
