@@ -3,7 +3,7 @@ matplotlib, through ``darts.render.draw_mesh``.
 
 Points are in the world frame (Z up, metres). ``.gif`` uses Pillow, ``.mp4`` ffmpeg (on PATH),
 ``.png`` a contact sheet of evenly spaced frames. ``read_usd_animation`` reads what
-``darts-sim`` writes (``/World/body`` and ``/World/garment``), so a finished result can be rendered.
+``darts-sim`` writes (``/World/body`` and its garments' meshes), so a finished result can be rendered.
 """
 from __future__ import annotations
 
@@ -48,7 +48,9 @@ def frames_to_draw(total: int, path: str | os.PathLike, max_frames: int = 60) ->
 
 
 def read_usd_animation(path: str | os.PathLike) -> Animation:
-    """The body and garment meshes of a ``darts-sim`` USD file, every time sample."""
+    """The body and garment meshes of a ``darts-sim`` USD file, every time sample: ``/World/body``
+    and every other mesh under ``/World`` (one garment, ``/World/garment``, or an outfit's, one mesh
+    each, in the file's order)."""
     from pxr import Usd, UsdGeom
 
     path = Path(path)
@@ -60,12 +62,16 @@ def read_usd_animation(path: str | os.PathLike) -> Animation:
         stage = None
     if stage is None:
         raise DartsInputError(path, "not a USD file")
+    body = stage.GetPrimAtPath("/World/body")
+    if not body or not body.IsA(UsdGeom.Mesh):
+        raise DartsInputError(path, "has no mesh /World/body (not written by darts-sim)")
+    world = stage.GetPrimAtPath("/World")
+    garments = [prim for prim in world.GetChildren() if prim.IsA(UsdGeom.Mesh) and prim.GetName() != "body"]
+    if not garments:
+        raise DartsInputError(path, "has no garment mesh under /World (not written by darts-sim)")
     faces, colors, frames = {}, {}, {}
-    for name in ("body", "garment"):
-        prim = stage.GetPrimAtPath(f"/World/{name}")
-        if not prim or not prim.IsA(UsdGeom.Mesh):
-            raise DartsInputError(path, f"has no mesh /World/{name} (not written by darts-sim)")
-        mesh = UsdGeom.Mesh(prim)
+    for prim in [body, *garments]:
+        name, mesh = prim.GetName(), UsdGeom.Mesh(prim)
         faces[name] = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), np.int64).reshape(-1, 3)
         color = mesh.GetDisplayColorAttr().Get()
         colors[name] = (np.asarray(color, np.float64) if color is not None and len(color) == len(faces[name])

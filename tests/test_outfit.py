@@ -153,8 +153,10 @@ def test_garments_for_different_bodies_are_refused():
 
 
 @pytest.mark.slow
-def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, tmp_path):
+def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, run_darts, tmp_path):
     from pxr import Usd, UsdGeom
+
+    from darts.preview import read_usd_animation
 
     out, stats_path = tmp_path / "outfit.usdc", tmp_path / "stats.json"
     code, printed, err = run_sim("long-pants", "long-sleeve-top", "walk", "-o", out, "--stats", stats_path,
@@ -171,6 +173,12 @@ def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, t
     assert stats["max_penetration"] <= 0.01 and stats["stable"]
     assert "long_pants/waistband" in stats["max_seam_gap"] and "long_sleeve_top/left_side" in stats["max_seam_gap"]
     assert stats["frames"][0]["garments"]["long_pants"]["waist_height"] is not None
+    # darts render draws the whole outfit: the body and each garment's mesh, every frame
+    animation = read_usd_animation(out)
+    assert list(animation.faces) == ["body", "long_pants", "long_sleeve_top"] and animation.count == 3
+    assert np.allclose(animation.frames["long_sleeve_top"][2], top)
+    code, _, err = run_darts("render", out, "-o", tmp_path / "outfit.png")
+    assert code == 0 and (tmp_path / "outfit.png").stat().st_size > 10000, err
 
 
 @pytest.mark.slow

@@ -187,7 +187,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_deform_parser(groups)
     add_reconstruct_parsers(groups)
     _add_plugin_parsers(groups)
-    preview = groups.add_parser("render", help="render a darts-sim USD result (body and garment, fixed camera)")
+    preview = groups.add_parser("render", help="render a darts-sim USD result (the body and every garment, fixed camera)")
     preview.add_argument("usd", metavar="OUT.usd", help="a USD file written by darts-sim")
     preview.add_argument("-o", "--output", required=True, metavar="PREVIEW",
                          help="preview.gif, preview.mp4 (needs ffmpeg) or preview.png (contact sheet of 6 frames)")
