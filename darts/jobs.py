@@ -157,6 +157,14 @@ def check_out_dir(out_dir: Path) -> None:
         raise DartsInputError(out_dir, f"cannot be created ({exc.strerror or exc})") from None
 
 
+def check_cluster_options(workers: int | None, address: str | None) -> None:
+    """Raise a DartsInputError for ``--workers`` under 1 or an ``--address`` nothing listens at."""
+    if workers is not None and workers < 1:
+        raise DartsInputError(None, f"--workers must be >= 1, got {workers}")
+    if address:
+        check_address(address)
+
+
 def check_address(address: str, timeout: float = 5.0) -> None:
     """Raise a DartsInputError unless something listens at the Ray address ``host:port`` (or
     ``ray://host:port``); Ray itself would retry for minutes."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from darts.jobs import MANIFEST, Job, check_address, check_out_dir, run_jobs
+from darts.jobs import MANIFEST, Job, check_cluster_options, check_out_dir, run_jobs
 
 
 def _table(rows: list[dict]) -> str:
@@ -27,12 +27,7 @@ def batch(args) -> int:
     out = Path(args.output)
     jobs = [Job(job.id, {**job.inputs, "command": job.inputs["command"].replace(JOB_FOLDER, str(out / job.id))})
             for job in load_jobs(args.spec)]
-    if args.workers is not None and args.workers < 1:
-        from darts.errors import DartsInputError
-
-        raise DartsInputError(None, f"--workers must be >= 1, got {args.workers}")
-    if args.address:
-        check_address(args.address)
+    check_cluster_options(args.workers, args.address)
     if args.list:  # writes nothing, not even OUT_DIR
         for job in jobs:
             print(f"{job.id}\n  {job.inputs['command']}")

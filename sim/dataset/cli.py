@@ -15,7 +15,7 @@ import numpy as np
 
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path
-from darts.jobs import MANIFEST, Job, check_address, check_out_dir, ray_session, run_jobs
+from darts.jobs import MANIFEST, Job, check_cluster_options, check_out_dir, ray_session, run_jobs
 
 SUMMARY = "summary.json"
 
@@ -103,10 +103,7 @@ def make(args) -> int:
     if unknown:
         raise DartsInputError(None, f"unknown categor{'y' if len(unknown) == 1 else 'ies'} {', '.join(unknown)} "
                                     f"(one of {', '.join(CATEGORIES)})")
-    if args.workers is not None and args.workers < 1:
-        raise DartsInputError(None, f"--workers must be >= 1, got {args.workers}")
-    if args.address:
-        check_address(args.address)
+    check_cluster_options(args.workers, args.address)
     out = Path(args.output)
     check_out_dir(out)
     categories = list(dict.fromkeys(args.categories)) if args.categories else list(CATEGORIES)

@@ -27,7 +27,7 @@ import numpy as np
 
 from darts.geometry.loops import feature_lines
 from darts.jobs import Job
-from sim.dataset.recipe import DRAPE_SECONDS, garment_recipe, generator
+from sim.dataset.recipe import DRAPE_SECONDS, garment_recipe, generator, recipe_garment, write_json
 
 GARMENTS = "garments"
 _RENDER = 4  # the generator purpose of a picture's appearance
@@ -47,30 +47,16 @@ def _body():
     return load_body(None)
 
 
-def _write_json(path: Path, data: dict) -> None:
-    path.write_text(json.dumps(data, indent=1))
-
-
 def make_garment(job: Job, folder: Path) -> dict:
     """A garment job (module docstring); returns the times of each stage and what the drape measured."""
-    from darts.crdl.deform import deform_dart, weld_garment
-    from darts.crdl.targets import edit_targets
-    from darts.dart.build import make_dart
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
     from darts.templates.categories import CATEGORIES
-    from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
     from sim.dataset.drape import drape
 
     recipe = garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]))
     body = _body()
-    started = time.perf_counter()
-    template = make_dart(recipe.category, body, betas=np.asarray(recipe.betas), edge_length=DATASET_EDGE_LENGTH)
-    built = time.perf_counter()
-    welded = weld_garment(template)
-    targets = edit_targets(recipe.category, welded.vertices, welded.lines, list(recipe.edits))
-    dart, report = deform_dart(template, body, targets, clearance=DEFAULT_EASE)
-    deformed = time.perf_counter()
+    dart, report, times = recipe_garment(recipe, body)
     draped = drape(dart, body, CATEGORIES[recipe.category].family, DRAPE_SECONDS)
     lines = feature_lines(dart, draped.vertices)
     top = "waist" if "waist" in dart.lines else "neckline"
@@ -79,12 +65,12 @@ def make_garment(job: Job, folder: Path) -> dict:
     save_npz(folder / "draped.npz", vertices=draped.vertices.astype(np.float32), faces=dart.faces.astype(np.int32),
              frame=np.array("canonical: Y up, front +Z, metres"))
     save_npz(folder / "lines.npz", **{name: points.astype(np.float32) for name, points in lines.items()})
-    times = {"template_s": round(built - started, 3), "crdl_s": round(deformed - built, 3), "drape_s": round(draped.seconds, 3)}
+    times["drape_s"] = round(draped.seconds, 3)
     meta = {**recipe.as_dict(), "vertices": len(dart.vertices), "crdl": {k: report[k] for k in ("arap_energy", "handle_rmse",
                                                                                                   "penetration", "iterations")},
             "drape": {"seconds": DRAPE_SECONDS, "stable": draped.stable, "max_penetration": draped.max_penetration,
                       "message": draped.message}, "times": times}
-    _write_json(folder / "meta.json", meta)
+    write_json(folder / "meta.json", meta)
     slid = f"the {top} slid {100 * drop:.1f} cm down in the drape (at most {100 * MAX_DROP:.0f} cm)" if drop > MAX_DROP else ""
     return {"status": "ok" if draped.stable and not slid else "unstable", "error": draped.message or slid,
             "category": recipe.category,
@@ -153,11 +139,11 @@ def render_sample(job: Job, folder: Path) -> dict:
     Image.fromarray(picture.image).save(folder / "image.png")
     Image.fromarray(picture.garment_mask.astype(np.uint8) * 255).save(folder / "mask.png")
     Image.fromarray(picture.body_mask.astype(np.uint8) * 255).save(folder / "body_mask.png")
-    _write_json(folder / "camera.json", look.camera.as_dict())
+    write_json(folder / "camera.json", look.camera.as_dict())
     save_npz(folder / "lines_px.npz", **{name: p.astype(np.float32) for name, p in pixels.items()})
     for name in ("lines.npz", "garment.npz", "draped.npz"):
         _link(source / name, folder / name)
-    _write_json(folder / "meta.json", {**{k: meta[k] for k in ("seed", "index", "id", "category", "betas", "edits")},
+    write_json(folder / "meta.json", {**{k: meta[k] for k in ("seed", "index", "id", "category", "betas", "edits")},
                                        "split": job.inputs["split"], "view": job.inputs["view"],
                                        "appearance": look.as_dict(), "render_s": round(rendered, 3)})
     return {"category": meta["category"], "garment": meta["id"], "render_s": round(rendered, 3),

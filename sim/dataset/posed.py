@@ -26,14 +26,13 @@ body, from a little below to well above, framing the whole body or the garment's
 """
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
 import numpy as np
 
 from darts.jobs import Job
-from sim.dataset.recipe import DRAPE_SECONDS, garment_recipe, generator
+from sim.dataset.recipe import DRAPE_SECONDS, garment_recipe, generator, recipe_garment, write_json
 
 #: The shipped motions the poses come from.
 POSED_MOTIONS = ("walk", "run", "squat", "twist", "wave", "jumping_jacks")
@@ -84,15 +83,9 @@ def carry(rest_body: np.ndarray, posed_body: np.ndarray, faces: np.ndarray, poin
     return np.einsum("nk,nkd->nd", bary, posed) + np.einsum("nij,ni->nj", _frames(posed), local)
 
 
-def _write_json(path: Path, data: dict) -> None:
-    path.write_text(json.dumps(data, indent=1))
-
-
 def make_posed_garment(job: Job, folder: Path) -> dict:
     """A posed garment job (module docstring); returns the times and what the run measured."""
     from darts.body.io import load_body
-    from darts.crdl.deform import deform_dart, weld_garment
-    from darts.crdl.targets import edit_targets
     from darts.dart.build import make_dart
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
@@ -100,7 +93,7 @@ def make_posed_garment(job: Job, folder: Path) -> dict:
     from darts.motion.amass import load_motion
     from darts.shipped import resolve_motion
     from darts.templates.categories import CATEGORIES
-    from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
+    from darts.templates.defaults import DATASET_EDGE_LENGTH
     from sim.body_track import build_body_track
     from sim.dataset.drape import DRAPE_SOLVER
     from sim.engine.settings import SimSettings
@@ -112,10 +105,7 @@ def make_posed_garment(job: Job, folder: Path) -> dict:
     body = load_body(None)
     betas = np.asarray(recipe.betas)
     started = time.perf_counter()
-    template = make_dart(recipe.category, body, betas=betas, edge_length=DATASET_EDGE_LENGTH)
-    welded = weld_garment(template)
-    targets = edit_targets(recipe.category, welded.vertices, welded.lines, list(recipe.edits))
-    dart, _ = deform_dart(template, body, targets, clearance=DEFAULT_EASE)
+    dart, _, _ = recipe_garment(recipe, body)
     built = time.perf_counter()
     motion = load_motion(resolve_motion(posed["motion"]))
     frames = posed["frame"] + 1
@@ -144,6 +134,6 @@ def make_posed_garment(job: Job, folder: Path) -> dict:
     times = {"build_s": round(built - started, 3), "simulate_s": round(simulated - built, 3)}
     penetration = max((f["penetration"] for f in result.frames), default=0.0)
     meta = {**recipe.as_dict(), **posed, "vertices": len(dart.vertices), "penetration": penetration, "times": times}
-    _write_json(folder / "meta.json", meta)
+    write_json(folder / "meta.json", meta)
     return {"status": "ok", "error": "", "category": recipe.category, "split": recipe.split, "vertices": len(dart.vertices),
             "motion": posed["motion"], "frame": posed["frame"], "other": posed["other"], "penetration": penetration, **times}

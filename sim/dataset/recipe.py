@@ -85,3 +85,31 @@ def garment_recipe(seed: int, index: int, categories: tuple[str, ...] = tuple(CA
     rng = generator(seed, index, _EDITS)
     edits = tuple((name, round(float(rng.uniform(low, high)), 4)) for name, (low, high) in EDIT_RANGES[category].items())
     return GarmentRecipe(seed, index, category, split, tuple(round(float(b), 4) for b in betas), edits)
+
+
+def recipe_garment(recipe: GarmentRecipe, body) -> tuple:
+    """(the recipe's DART, the CRDL's report, {"template_s", "crdl_s"} seconds): its category's
+    template made on the recipe's body shape at the dataset's edge length, welded, then deformed by
+    the CRDL to the recipe's edits with the default ease (``body``: the ``BodyModel``)."""
+    import time
+
+    from darts.crdl.deform import deform_dart, weld_garment
+    from darts.crdl.targets import edit_targets
+    from darts.dart.build import make_dart
+    from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
+
+    started = time.perf_counter()
+    template = make_dart(recipe.category, body, betas=np.asarray(recipe.betas), edge_length=DATASET_EDGE_LENGTH)
+    built = time.perf_counter()
+    welded = weld_garment(template)
+    targets = edit_targets(recipe.category, welded.vertices, welded.lines, list(recipe.edits))
+    dart, report = deform_dart(template, body, targets, clearance=DEFAULT_EASE)
+    return dart, report, {"template_s": round(built - started, 3), "crdl_s": round(time.perf_counter() - built, 3)}
+
+
+def write_json(path, data: dict) -> None:
+    """``data`` as indented JSON at ``path`` (a job's own folder: the job runner makes it whole)."""
+    import json
+    from pathlib import Path
+
+    Path(path).write_text(json.dumps(data, indent=1))
