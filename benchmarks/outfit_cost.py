@@ -33,7 +33,7 @@ def measure(garments: list[str], frames: int) -> dict:
     from sim.engine.model import cloth_model
     from sim.engine.settings import SimSettings
     from sim.engine.simulation import Simulation
-    from sim.outfit import covering_offsets, layer_order, outfit_model
+    from sim.outfit import layer_order, outfit_model
 
     body, settings = darts.load_body(), SimSettings()
     track = build_body_track(body, darts.load_motion("walk"), settings.fps, 0.5)
@@ -46,8 +46,6 @@ def measure(garments: list[str], frames: int) -> dict:
     for k in range(1, min(frames + 1, len(track.vertices))):
         for name, simulation in sims.items():
             start = time.process_time()
-            if name == "outfit":  # as sim.run does: the layers' offsets off the body where they are now
-                simulation.collider.set_offset(covering_offsets(outfit, simulation.positions()))
             simulation.step_frame(track.vertices[k])
             if k > 1:  # the first frame compiles the kernels
                 cpu[name] += time.process_time() - start

@@ -1,4 +1,6 @@
-"""Plot the benchmark results (docs/data/benchmark_*.json) into docs/images/benchmarks.png.
+"""Plot the benchmark results (docs/data/benchmark_*.json) into docs/images/benchmarks.png: speed
+against penetration for ours and Newton (``benchmark_newton_substeps.json``), our cost against
+garment size and where the time goes (``benchmark_scaling.json``).
 
     python benchmarks/plot.py
 """
@@ -30,23 +32,29 @@ def main() -> None:
     import matplotlib.ticker
     import numpy as np
 
-    newton = json.loads((DATA / "benchmark_newton.json").read_text())
+    comparison = json.loads((DATA / "benchmark_newton_substeps.json").read_text())["runs"]
     scaling = json.loads((DATA / "benchmark_scaling.json").read_text())["sizes"]
     figure, (bars, curve, shares) = plt.subplots(1, 3, figsize=(16, 4.6))
 
-    names = list(newton["results"])
-    fps = [newton["results"][n]["sim_fps"] for n in names]
-    colors = ["tab:blue" if n == "ours" else ("tab:gray" if newton["results"][n]["stable"] else "tab:red") for n in names]
-    bars.bar(names, [max(f, 1e-4) for f in fps], color=colors)
+    # speed against quality: every run of the comparison (docs/benchmarks.md, "Against Newton")
+    points = {}
+    for run in comparison.values():
+        substeps = run["scene"]["newton_substeps"]
+        for name, result in run["results"].items():
+            if result["stable"]:
+                label = "ours (defaults)" if name == "ours" else f"Newton VBD {substeps} x 10"
+                points[label] = (result["sim_fps"], 100 * result["max_penetration"])
+    for label, (fps, penetration) in points.items():
+        bars.scatter(fps, penetration, color="tab:blue" if label.startswith("ours") else "tab:gray", s=40)
+        bars.annotate(label, (fps, penetration), textcoords="offset points", xytext=(6, 4), fontsize=8)
+    bars.set_xscale("log")
     bars.set_yscale("log")
-    bars.tick_params(axis="x", labelrotation=30, labelsize=8)
-    bars.set_ylabel("simulated frames / s (log)")
-    scene = newton["scene"]
-    bars.set_title(f"{scene['garment']} on {scene['motion']}, {scene['particles']} particles, {scene['substeps']} substeps",
+    bars.axhline(1.0, color="tab:red", linestyle=":", linewidth=1)
+    bars.set_xlabel("simulated frames / s (CPU, log)")
+    bars.set_ylabel("max penetration, % of particles (log)")
+    scene = next(iter(comparison.values()))["scene"]
+    bars.set_title(f"{scene['garment']} on {scene['motion']}, {scene['particles']} particles, {scene['frames']} frames",
                    fontsize=9)
-    for x, (name, f) in enumerate(zip(names, fps)):
-        label = f"{f:.3g}" if newton["results"][name]["stable"] else "blew up"
-        bars.text(x, max(f, 1e-4) * 1.15, label, ha="center", fontsize=8)
 
     sizes = list(scaling)
     particles = np.array([scaling[s]["particles"] for s in sizes])

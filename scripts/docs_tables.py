@@ -57,10 +57,26 @@ def photo_outfits() -> list[str]:
     return rows
 
 
+def imports() -> list[str]:
+    """Meshes imported as DARTs (``docs/data/import.json``, written by ``python scripts/evaluate_import.py``)."""
+    rows = ["| mesh | category (guessed) | scale | DART→mesh mean / p95 | mesh→DART mean / p95 | lines max | inside body "
+            "| walk: stable, penetration |", "|---|---|---|---|---|---|---|---|"]
+    for name, r in json.loads((DATA / "import.json").read_text()).items():
+        walk = r["walk"]
+        rows.append(f"| {name} | {r['category']}{' (guessed)' if 'category_guess_mm' in r else ''} | {r['scale']:.3f} | "
+                    f"{r['dart_to_mesh']['mean_mm']:.2f} / {r['dart_to_mesh']['p95_mm']:.2f} | "
+                    f"{r['mesh_to_dart']['mean_mm']:.2f} / {r['mesh_to_dart']['p95_mm']:.2f} | "
+                    f"{r['feature_line_max_mm']:.1f} mm | {100 * r['inside_body']:.2f} % | "
+                    f"{'yes' if walk['stable'] else 'no'} ({walk['simulated_frames']} frames), "
+                    f"{100 * walk['max_penetration']:.2f} % |")
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
     "photo-outfits": ("docs/reconstruction.md", photo_outfits),
+    "import": ("docs/import.md", imports),
 }
 
 

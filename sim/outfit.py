@@ -23,18 +23,15 @@ import numpy as np
 
 from darts.dart.model import Dart
 from darts.errors import DartsInputError
+from sim.engine.layers import COVER, covering_offsets
 from sim.engine.model import ClothModel, cloth_model, dihedral_angles
 
-#: metres from an inner garment within which an outer particle counts as covering it
-COVER = 0.03
 #: thicknesses between two layers where they overlap, at the start
 LAYER_GAP = 2.0
 #: metres an outer particle is lifted at most (over a flared skirt a top's hem goes out 6-7 cm)
 MAX_LIFT = 0.1
 #: edge rings over which a lift fades out
 LIFT_RINGS = 6
-#: thicknesses a particle keeps off the body beyond its own, per inner garment within ``COVER`` of it
-LAYER_OFFSET = 1.0
 
 
 @dataclass
@@ -150,7 +147,7 @@ def separate_layers(models: list[ClothModel], body_vertices: np.ndarray, body_fa
 def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray, body_faces: np.ndarray) -> Outfit:
     """``darts`` (inner first) as one model on the body at rest (canonical frame): the garments'
     models joined after ``separate_layers``; rest lengths and angles of lifted garments re-measured,
-    and the layers' offsets off the body (``covering_offsets``) found on the rest shape."""
+    and the layers' offsets off the body (``sim.engine.layers.covering_offsets``) found on the rest shape."""
     if len({d.body_model for d in darts}) > 1:
         raise DartsInputError(None, "the garments of an outfit must be made for the same body "
                                     f"(found {', '.join(sorted({d.body_model for d in darts}))})")
@@ -167,7 +164,7 @@ def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray
                     vertex_slices=[slice(a, b) for a, b in zip(vertex_edges[:-1], vertex_edges[1:])],
                     particle_slices=[slice(a, b) for a, b in zip(particle_edges[:-1], particle_edges[1:])],
                     lift=np.concatenate(lifts), caps=opening_caps(model, model.rest))
-    model.body_offset = covering_offsets(outfit, model.rest)
+    model.body_offset = covering_offsets(model, model.rest)
     return outfit
 
 
@@ -268,22 +265,6 @@ def edges_through(points: np.ndarray, faces: np.ndarray, edges: np.ndarray) -> n
     hits = wp.zeros(len(edges), dtype=wp.int32)
     wp.launch(kernels.edges_through_mesh, dim=len(edges), inputs=[mesh.id, x, segments, hits])
     return hits.numpy().astype(bool)
-
-
-def covering_offsets(outfit: Outfit, particles: np.ndarray) -> np.ndarray:
-    """``body_offset`` [P] (m) for the particles where they are now: one ``LAYER_OFFSET`` thickness
-    per inner garment whose surface is within ``COVER`` of the particle."""
-    from darts.geometry.distance import SurfaceDistance
-
-    model = outfit.model
-    thickness = float(model.material["thickness"])
-    offset = np.zeros(len(particles))
-    for j in range(len(outfit.names) - 1):
-        surface = SurfaceDistance(particles, model.faces[model.layer[model.faces[:, 0]] == j])
-        outer = np.flatnonzero(model.layer > j)
-        gap, _, _ = surface.query(particles[outer], max_dist=COVER, winding=False)
-        offset[outer[np.abs(gap) < 0.99 * COVER]] += LAYER_OFFSET * thickness
-    return offset
 
 
 def layer_crossings(outfit: Outfit, particles: np.ndarray) -> dict[str, int]:

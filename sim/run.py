@@ -20,7 +20,7 @@ from sim.body_track import BodyTrack
 from sim.engine.model import ClothModel, cloth_model
 from sim.engine.settings import SimSettings
 from sim.engine.simulation import Simulation
-from sim.outfit import Outfit, covering_offsets, layer_crossings, layer_order
+from sim.outfit import Outfit, layer_crossings, layer_order
 from sim.quality import edge_strain, strain_summary, waist_height
 
 
@@ -86,8 +86,6 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
     bar = tqdm(total=total - 1, unit="frame", desc="simulating", disable=not progress, leave=False)
     for k in range(total):
         if k > 0:
-            if outfit is not None:  # the layers' offsets off the body, where the garments are now
-                solver.collider.set_offset(covering_offsets(outfit, solver.positions()))
             solver.step_frame(track.vertices[k])
             result.simulated_frames += 1
             bar.update(1)

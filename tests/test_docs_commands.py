@@ -64,3 +64,15 @@ def test_a_documented_command_parses_and_its_inputs_exist(where, command):
     for value in vars(args).values():
         if isinstance(value, str) and value.startswith("scenes/"):
             assert (ROOT / value).exists(), f"{where}: {value} does not exist"
+
+
+def test_the_readmes_darts_sim_synopsis_names_every_option():
+    """The README's darts-sim line lists every flag darts-sim has (settings come from one declaration
+    and drift in; this catches a synopsis that does not follow)."""
+    from sim.cli import parser
+
+    synopsis = next(line for line in (ROOT / "README.md").read_text().splitlines() if line.startswith("| `darts-sim GARMENT"))
+    flags = {option for action in parser()._actions for option in action.option_strings
+             if option.startswith("--") and option not in ("--help", "--version", "--output")}
+    missing = sorted(flag for flag in flags if not re.search(rf"(?<![\w-]){re.escape(flag)}(?![\w-])", synopsis))
+    assert not missing, f"README's darts-sim synopsis leaves out {missing}"

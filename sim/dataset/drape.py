@@ -17,8 +17,9 @@ from sim.body_track import BodyTrack
 from sim.engine.settings import SimSettings
 from sim.run import simulate
 
-#: The solver that holds each family today (docs/simulation.md, "Known limits"): XPBD lets
-#: waistbands creep down the hips, the implicit mass-spring solver holds them.
+#: The drape's solver per family: chosen when XPBD, before its long-range tethers, let waistbands
+#: creep down the hips and the implicit mass-spring solver held them; kept since, so that a dataset
+#: made again from its seed is the same garments.
 DRAPE_SOLVER = {"top": "xpbd", "dress": "xpbd", "pants": "mass-spring", "skirt": "mass-spring"}
 
 

@@ -72,6 +72,9 @@ class SimSettings:
     # XPBD: the surface tethers' limits times this (never under the rest chord); the graph path they are
     # measured on runs about 2 % over the surface distance, so a little under 1 lets them bind sooner
     tether_scale: float = 1.0
+    # a model of several garments: each frame, every particle keeps a thickness more off the body per
+    # garment under it (``sim.engine.layers``); off: the model's ``body_offset`` as it is
+    layer_offsets: bool = True
     # kernel launches recorded once and replayed, the XPBD sweeps as one captured block (``sim.engine.launch``);
     # off: every launch through wp.launch from Python, as before issue 30 (the same results, slower)
     replay_launches: bool = True

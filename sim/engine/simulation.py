@@ -14,6 +14,7 @@ import numpy as np
 from darts.geometry.warp_runtime import warp
 from sim.engine import kernels
 from sim.engine.collider import BodyCollider
+from sim.engine.layers import covering_offsets
 from sim.engine.model import ClothModel
 from sim.engine.settings import SimSettings
 from sim.engine.solvers import resolved_settings, solver_class
@@ -75,7 +76,11 @@ class Simulation:
         return self.solver.self_contact
 
     def step_frame(self, body_next: np.ndarray) -> None:
-        """Advance one frame (1 / fps seconds) while the body moves to ``body_next`` [V,3]."""
+        """Advance one frame (1 / fps seconds) while the body moves to ``body_next`` [V,3]; a model of
+        several layers first keeps each particle off the body by the garments under it now
+        (``sim.engine.layers.covering_offsets``; ``settings.layer_offsets``)."""
+        if self.settings.layer_offsets and self.model.layer.max() > 0:
+            self.collider.set_offset(covering_offsets(self.model, self.positions()))
         self.collider.begin_frame(body_next)
         substeps = self.settings.substeps
         dt = 1.0 / (self.settings.fps * substeps)
