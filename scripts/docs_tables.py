@@ -24,6 +24,21 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "docs" / "data"
 
 
+def _script(name: str):
+    """The module of ``scripts/NAME.py`` (its table renderer is the one its run prints)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(f"_docs_tables_{name}", ROOT / "scripts" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _block(text: str, index: int) -> list[str]:
+    """The ``index``-th of the Markdown tables in ``text`` (tables apart by a blank line)."""
+    return text.split("\n\n")[index].splitlines()
+
+
 def _cell(value) -> str:
     return str(value).replace("|", "\\|")
 
@@ -72,11 +87,55 @@ def imports() -> list[str]:
     return rows
 
 
+def simulation_results() -> list[str]:
+    """Every shipped garment x motion at the defaults (``docs/data/simulation_table.json``, written
+    by ``python scripts/simulate_table.py``)."""
+    rows = json.loads((DATA / "simulation_table.json").read_text())
+    return _block(_script("simulate_table").markdown(rows), 0)
+
+
+def seam_regimes() -> list[str]:
+    """Each garment's walk in each seam regime (the same JSON and script)."""
+    rows = json.loads((DATA / "simulation_table.json").read_text())
+    return _block(_script("simulate_table").markdown(rows), 1)
+
+
+def outfits() -> list[str]:
+    """The shipped outfits (``docs/data/outfits.json``, written by ``python scripts/simulate_outfits.py``)."""
+    return _script("simulate_outfits").table(json.loads((DATA / "outfits.json").read_text())).splitlines()
+
+
+def crdl_comparison() -> list[str]:
+    """The CRDL against handle-based Laplacian deformation and libigl's ARAP
+    (``docs/data/crdl_comparison.json``, written by ``python scripts/compare_deformations.py``)."""
+    rows = json.loads((DATA / "crdl_comparison.json").read_text())
+    return _script("compare_deformations").markdown(rows).splitlines()
+
+
+def _reconstruction_tables() -> list[list[str]]:
+    """The tables ``python scripts/evaluate_reconstruction.py`` prints from ``docs/data/reconstruction.json``:
+    the classifier's accuracy, line Chamfer on test and test_unseen, end to end."""
+    text = _script("evaluate_reconstruction").tables(json.loads((DATA / "reconstruction.json").read_text()))
+    return [block.splitlines() for block in text.split("\n\n") if block.startswith("|")]
+
+
+def reconstruction(index: int) -> Callable[[], list[str]]:
+    return lambda: _reconstruction_tables()[index]
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
     "photo-outfits": ("docs/reconstruction.md", photo_outfits),
     "import": ("docs/import.md", imports),
+    "simulation-results": ("docs/simulation.md", simulation_results),
+    "seam-regimes": ("docs/simulation.md", seam_regimes),
+    "outfits": ("docs/simulation.md", outfits),
+    "crdl-comparison": ("docs/crdl.md", crdl_comparison),
+    "classifier": ("docs/reconstruction.md", reconstruction(0)),
+    "lines-test": ("docs/reconstruction.md", reconstruction(1)),
+    "lines-test-unseen": ("docs/reconstruction.md", reconstruction(2)),
+    "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
 }
 
 

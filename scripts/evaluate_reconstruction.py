@@ -160,7 +160,7 @@ def tables(result: dict) -> str:
     rows = [r for r in result["end_to_end"] if r["status"] == "ok"]
     if rows:
         mean = lambda f: np.mean([f(r) for r in rows])  # noqa: E731
-        out += ["| end to end | surface Chamfer (cm) | mask IoU |", "|---|---|---|"]
+        out += [f"| end to end ({len(rows)} test pictures) | surface Chamfer (cm) | mask IoU |", "|---|---|---|"]
         for key, label in (("template", "undeformed template"), ("ours", "reconstructed")):
             chamfer = mean(lambda r, key=key: r[key]["surface_chamfer_cm"])
             out.append(f"| {label} | {chamfer:.2f} | {mean(lambda r, key=key: r[key]['mask_iou']):.3f} |")

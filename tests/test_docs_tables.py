@@ -21,7 +21,7 @@ def test_a_docs_table_matches_its_source(name):
 
 def test_a_changed_table_is_noticed(tmp_path, monkeypatch):
     """A number edited by hand in a table is found (the check compares the whole table)."""
-    name = sorted(docs_tables.TABLES)[0]
+    name = "photo-outfits"
     doc, rows = docs_tables.TABLES[name]
     copy = tmp_path / "docs" / Path(doc).name
     copy.parent.mkdir()
