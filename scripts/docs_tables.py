@@ -24,11 +24,11 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "docs" / "data"
 
 
-def _script(name: str):
-    """The module of ``scripts/NAME.py`` (its table renderer is the one its run prints)."""
+def _script(name: str, folder: str = "scripts"):
+    """The module of ``FOLDER/NAME.py`` (its table renderer is the one its run prints)."""
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location(f"_docs_tables_{name}", ROOT / "scripts" / f"{name}.py")
+    spec = importlib.util.spec_from_file_location(f"_docs_tables_{name}", ROOT / folder / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -123,6 +123,20 @@ def reconstruction(index: int) -> Callable[[], list[str]]:
     return lambda: _reconstruction_tables()[index]
 
 
+def reconstruct_terms() -> list[str]:
+    """The reconstruction's silhouette terms and picture sizes against CPU time
+    (``docs/data/benchmark_reconstruct.json``, ``python benchmarks/reconstruct_speed.py``)."""
+    rows = json.loads((DATA / "benchmark_reconstruct.json").read_text())
+    return _script("reconstruct_speed", "benchmarks").table(rows).splitlines()
+
+
+def photo_speed() -> list[str]:
+    """A photograph to an outfit, end to end (``docs/data/benchmark_photo_speed.json``,
+    ``python benchmarks/reconstruct_speed.py --photos ...``)."""
+    rows = json.loads((DATA / "benchmark_photo_speed.json").read_text())["rows"]
+    return _script("reconstruct_speed", "benchmarks").photo_table(rows).splitlines()
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -136,6 +150,8 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "lines-test": ("docs/reconstruction.md", reconstruction(1)),
     "lines-test-unseen": ("docs/reconstruction.md", reconstruction(2)),
     "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
+    "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
+    "photo-speed": ("docs/benchmarks.md", photo_speed),
 }
 
 
