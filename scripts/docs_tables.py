@@ -137,6 +137,52 @@ def photo_speed() -> list[str]:
     return _script("reconstruct_speed", "benchmarks").photo_table(rows).splitlines()
 
 
+def materials() -> list[str]:
+    """The materials a DART may carry (``darts.dart.model.MATERIALS``, their one declaration)."""
+    from darts.dart.model import MATERIALS
+
+    rows = ["| material | density (kg/m²) | stretch (N/m) | bend (N·m) | friction | thickness (m) |", "|---|---|---|---|---|---|"]
+    for name, m in MATERIALS.items():
+        bend = f"{m['bend_stiffness']:.0e}".replace("e-0", "e-")
+        rows.append(f"| {name} | {m['density']:.2f} | {m['stretch_stiffness']:g} | {bend} | {m['friction']:g} | "
+                    f"{m['thickness']:g} |")
+    return rows
+
+
+def shipped_garments() -> list[str]:
+    """The shipped DARTs (``scenes/garments/``, made by ``python scripts/make_garments.py``)."""
+    from darts.dart.io import load_dart
+    from scenes import GARMENTS_DIR
+
+    rows = ["| garment | category | vertices | faces | panels | seams | seam pairs | feature lines |",
+            "|---|---|---|---|---|---|---|---|"]
+    order = _script("make_garments").shipped_names()
+    for name in order:
+        dart = load_dart(GARMENTS_DIR / f"{name}.npz")
+        rows.append(f"| {name} | {dart.category} | {len(dart.vertices)} | {len(dart.faces)} | {len(dart.panel_names)} | "
+                    f"{len(dart.seams)} | {len(dart.pairs)} | {', '.join(dart.lines)} |")
+    return rows
+
+
+def dataset_parts() -> list[str]:
+    """The dataset's parts (``docs/data/dataset_summary.json``, written by ``darts dataset make``)."""
+    parts = json.loads((DATA / "dataset_summary.json").read_text())["samples_per_split"]
+    names = {"test_unseen": "test_unseen (the test garments, unseen appearance)"}
+    return ["| part | samples |", "|---|---|"] + [f"| {names.get(p, p)} | {parts[p]} |"
+                                                 for p in ("train", "val", "test", "test_unseen")]
+
+
+def batch_speed() -> list[str]:
+    """A batch serially and on Ray (``docs/data/benchmark_batch.json``, ``python benchmarks/batch.py``)."""
+    b = json.loads((DATA / "benchmark_batch.json").read_text())
+    return ["| | wall time | jobs per hour | mean job |", "|---|---|---|---|",
+            f"| serial loop | {b['serial_seconds']:.0f} s | {b['serial_jobs_per_hour']:.1f} | "
+            f"{b['mean_job_seconds']['serial']:.1f} s |",
+            f"| Ray, {b['workers']} workers | {b['ray_seconds']:.0f} s | {b['ray_jobs_per_hour']:.1f} | "
+            f"{b['mean_job_seconds']['ray']:.1f} s |",
+            f"| **ratio** | | **{b['speedup']:.3f}×** | |"]
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -152,6 +198,10 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
     "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
     "photo-speed": ("docs/benchmarks.md", photo_speed),
+    "materials": ("docs/simulation.md", materials),
+    "shipped-garments": ("docs/templates.md", shipped_garments),
+    "dataset-parts": ("docs/dataset.md", dataset_parts),
+    "batch-speed": ("docs/batch.md", batch_speed),
 }
 
 

@@ -1,5 +1,6 @@
 """Write the shipped DARTs to scenes/garments/ (one per category on the default body, plus a
-short-sleeve top with a collar and a tie), and print the table of docs/templates.md."""
+short-sleeve top with a collar and a tie); ``python scripts/docs_tables.py shipped-garments`` then
+writes their table in docs/templates.md."""
 from __future__ import annotations
 
 import argparse
@@ -13,19 +14,24 @@ from darts.templates.categories import CATEGORIES
 EXTRAS = {"tshirt-collar-tie": ("short-sleeve-top", ["collar", "tie"])}
 
 
+def _jobs() -> dict[str, tuple[str, list[str]]]:
+    return {cid: (cid, []) for cid in CATEGORIES} | EXTRAS
+
+
+def shipped_names() -> list[str]:
+    """The shipped garments' names, in the order they are made."""
+    return list(_jobs())
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output-dir", default="scenes/garments")
     args = parser.parse_args()
     body = load_body()
-    jobs = {cid: (cid, []) for cid in CATEGORIES} | EXTRAS
-    print("| garment | category | vertices | faces | panels | seams | seam pairs | feature lines |")
-    print("|---|---|---|---|---|---|---|---|")
-    for name, (category, accessories) in jobs.items():
+    for name, (category, accessories) in _jobs().items():
         dart = make_dart(category, body, accessories=accessories)
         save_dart(dart, Path(args.output_dir) / f"{name}.npz")
-        print(f"| {name} | {category} | {len(dart.vertices)} | {len(dart.faces)} | {len(dart.panel_names)} | "
-              f"{len(dart.seams)} | {len(dart.pairs)} | {', '.join(dart.lines)} |")
+        print(f"wrote {name}: {len(dart.vertices)} vertices")
 
 
 if __name__ == "__main__":
