@@ -183,6 +183,78 @@ def batch_speed() -> list[str]:
             f"| **ratio** | | **{b['speedup']:.3f}×** | |"]
 
 
+def _median(rows: list[dict], key: str) -> float:
+    import numpy as np
+
+    return float(np.median([r[key] for r in rows if r.get(key) is not None]))
+
+
+def posed_renders(name: str) -> Callable[[], list[str]]:
+    """The held-out posed renders read with no mask and no camera (``docs/data/NAME.json``, written
+    by ``python scripts/evaluate_photos.py --data ~/.cache/darts/posed-s101``): the person, the
+    body fit, and the garment's category and mask by the parsing (issue 44) where it was run and by
+    the garment network."""
+
+    def rows() -> list[str]:
+        data = json.loads((DATA / f"{name}.json").read_text())
+        summary, pictures = data["summary"], data["pictures"]
+        found = summary["found_per_category"].values()
+        low, high = (min(int(f.split("/")[0]) for f in found), max(int(f.split("/")[0]) for f in found))
+        count = summary["pictures"]
+        table = [f"| {count} pictures, 256 × 256 | |", "|---|---|",
+                 f"| person found | {summary['found']} ({100 * summary['found'] / count:.1f} %; every category "
+                 f"{low}–{high} of {count // len(found)}) |",
+                 "| person mask IoU against the truth (body and both garments), median | "
+                 f"{summary['person_mask_iou_median']:.3f} |",
+                 f"| body joints: the fitted body's 22 against the truth (joints in view), median | "
+                 f"{summary['joint_error_px_median']:.1f} pixels, {summary['joint_error_pct_height_median']:.1f} % of the "
+                 "person's height |"]
+        if "parsing" in summary:
+            table.append(f"| category: the parsing (every garment read, the one of the picture's kind) | "
+                         f"**{100 * summary['parsing']['category_accuracy']:.1f} %** |")
+        table += [f"| category: the garment network | {100 * summary['garment_network']['category_accuracy']:.1f} % |",
+                  f"| category: the shipped classifier on the whole picture / on the garment alone (true mask) | "
+                  f"{100 * summary['category_accuracy']:.1f} % / {100 * summary['category_accuracy_garment_alone']:.1f} % |"]
+        if "parsing" in summary:
+            table.append(f"| garment mask: the parsing's against the truth, IoU median | "
+                         f"**{summary['parsing']['mask_iou_median']:.3f}** |")
+        table.append(f"| garment mask: the garment network's against the truth, IoU median | "
+                     f"{summary['garment_network']['mask_iou_median']:.3f} |")
+        seconds = summary["seconds_median"]
+        stages = [("person", seconds["person_s"]), ("body fit", seconds["body_fit_s"])]
+        stages += [("parsing", _median(pictures, "parsing_s"))] if "parsing" in summary else []
+        stages += [("garment network", seconds["garment_s"])]
+        table.append(f"| CPU per picture, median: {' / '.join(n for n, _ in stages)} | "
+                     f"{' / '.join(f'{v:.3f}' if v < 0.1 else f'{v:.2f}' for _, v in stages)} s |")
+        return table
+
+    return rows
+
+
+def posed_reconstructions(name: str, photo_label: str) -> Callable[[], list[str]]:
+    """``darts reconstruct`` on every third posed render (``docs/data/NAME.json``, ``python
+    scripts/evaluate_photos.py --data ~/.cache/darts/posed-s101 --reconstruct --every 3``): with the
+    true mask and category, and from the picture alone (``photo_label``), against the template."""
+
+    def rows() -> list[str]:
+        summary = json.loads((DATA / f"{name}.json").read_text())["summary"]
+        table = [f"| {summary['pictures']} held-out pictures ({summary['found']} with a person), medians | reconstructed | "
+                 "garment IoU | template's | surface Chamfer | template's | line Chamfer | template's |",
+                 "|---|---|---|---|---|---|---|---|"]
+        for kind, label in (("oracle", "the true mask and category given"), ("photo", photo_label)):
+            r = summary[kind]
+            done = (f"{r['reconstructed']}" if kind == "oracle" else
+                    f"{r['reconstructed']} ({r['refused']} refused under 50 %; {r['category_right']} right)")
+            table.append(f"| {label} | {done} | **{r['garment_iou_median']:.3f}** | {r['template_iou_median']:.3f} | "
+                         f"{r['surface_chamfer_cm_median_category_right']:.2f} cm | "
+                         f"{r['template_chamfer_cm_median_category_right']:.2f} cm | "
+                         f"**{r['line_chamfer_cm_median_category_right']:.2f} cm** | "
+                         f"{r['template_line_chamfer_cm_median_category_right']:.2f} cm |")
+        return table
+
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -201,6 +273,12 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "materials": ("docs/simulation.md", materials),
     "shipped-garments": ("docs/templates.md", shipped_garments),
     "dataset-parts": ("docs/dataset.md", dataset_parts),
+    "posed-renders-before": ("docs/reconstruction.md", posed_renders("photo_posed_eval")),
+    "posed-renders": ("docs/reconstruction.md", posed_renders("photo_posed_parsing")),
+    "posed-reconstructions-before": ("docs/reconstruction.md",
+                                     posed_reconstructions("photo_posed_reconstruct", "nothing given (garment network)")),
+    "posed-reconstructions": ("docs/reconstruction.md",
+                              posed_reconstructions("photo_posed_reconstruct_parsing", "nothing given (parsing)")),
     "batch-speed": ("docs/batch.md", batch_speed),
 }
 
