@@ -255,6 +255,46 @@ def posed_reconstructions(name: str, photo_label: str) -> Callable[[], list[str]
     return rows
 
 
+def memory() -> list[str]:
+    """Peak memory of a run against its length (``docs/data/benchmark_memory.json``, ``python benchmarks/memory.py``)."""
+    m = json.loads((DATA / "benchmark_memory.json").read_text())
+    return ["| frames | peak resident memory |", "|---|---|", f"| 120 (30 fps) | {m['peak_mib_120_frames']:.0f} MiB |",
+            f"| 600 (150 fps) | {m['peak_mib_600_frames']:.0f} MiB |"]
+
+
+def outfit_cost() -> list[str]:
+    """An outfit against its garments alone (``docs/data/benchmark_outfit.json``, ``python benchmarks/outfit_cost.py``)."""
+    rows = ["| outfit (inner first) | outfit CPU | garments alone, summed | ratio |", "|---|---|---|---|"]
+    for r in json.loads((DATA / "benchmark_outfit.json").read_text()).values():
+        alone = sum(r["cpu_s"][g] for g in r["garments"])
+        rows.append(f"| {' + '.join(r['garments'])} | {r['cpu_s']['outfit']:.1f} s | {alone:.1f} s | "
+                    f"{r['ratio_outfit_to_sum_alone']:.2f}× |")
+    return rows
+
+
+def startup() -> list[str]:
+    """Start-up of the commands (``docs/data/benchmark_startup.json``, ``python benchmarks/startup.py``)."""
+    rows = ["| command | before (CPU, peak memory) | now | faster | costliest imports now (ms) |", "|---|---|---|---|---|"]
+    for command, r in json.loads((DATA / "benchmark_startup.json").read_text())["commands"].items():
+        imports = ", ".join(f"{name} {us / 1000:.0f}" for name, us in r["costliest_imports_us"][:3])
+        rows.append(f"| `{command}` | {r['baseline']['cpu_s']:.2f} s, {r['baseline']['peak_mib']:.0f} MiB | "
+                    f"{r['now']['cpu_s']:.2f} s, {r['now']['peak_mib']:.0f} MiB | {r['speedup']:.1f}× | {imports} |")
+    return rows
+
+
+def scaling() -> list[str]:
+    """Cost against garment size (``docs/data/benchmark_scaling.json``, ``python benchmarks/scaling.py``);
+    the 6k top is the reference scene."""
+    rows = ["| garment size | particles | simulated frames / s | µs per particle per substep |", "|---|---|---|---|"]
+    for size, r in json.loads((DATA / "benchmark_scaling.json").read_text())["sizes"].items():
+        fps = f"{r['sim_fps']:.3g}" if r["sim_fps"] >= 1 else f"{r['sim_fps']:.2f}"
+        cells = [size, f"{r['particles']:,}", fps, f"{r['us_per_particle_substep']:.2f}"]
+        if size == "6k":
+            cells = ["**6k (reference)**", *(f"**{c}**" for c in cells[1:])]
+        rows.append("| " + " | ".join(cells) + " |")
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -269,6 +309,10 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "lines-test-unseen": ("docs/reconstruction.md", reconstruction(2)),
     "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
     "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
+    "memory": ("docs/benchmarks.md", memory),
+    "scaling": ("docs/benchmarks.md", scaling),
+    "outfit-cost": ("docs/benchmarks.md", outfit_cost),
+    "startup": ("docs/benchmarks.md", startup),
     "photo-speed": ("docs/benchmarks.md", photo_speed),
     "materials": ("docs/simulation.md", materials),
     "shipped-garments": ("docs/templates.md", shipped_garments),
