@@ -295,6 +295,31 @@ def scaling() -> list[str]:
     return rows
 
 
+def solver_defaults() -> list[str]:
+    """Today's default against issue 30's on five scenes, configurations alternated in one process
+    (``docs/data/benchmark_solver.json``, ``python benchmarks/solver_speed.py``)."""
+    scenes = {"short-sleeve-top": "top", "short-skirt": "short skirt", "long-pants": "long pants"}
+    rows = ["| scene | baseline frames / s (CPU) | default frames / s | ratio | strain mean / p99 / max | "
+            "penetration sign / winding | worst stiff-seam gap | self-crossing edges |", "|---|---|---|---|---|---|---|---|"]
+
+    def strain(r):
+        return f"{100 * r['strain_mean']:.2f} / {100 * r['strain_p99']:.3g} / {100 * r['strain_max']:.0f}"
+
+    def penetration(r):
+        winding = 100 * r["max_penetration_winding"]
+        return f"{100 * r['max_penetration']:.2f} / " + (f"{winding:.2f}" if winding < 10 else f"{winding:.1f}")
+
+    for scene in json.loads((DATA / "benchmark_solver.json").read_text())["scenes"]:
+        results = scene["results"]
+        base = next(r for r in results.values() if r["ratio"] == 1.0)
+        new = next(r for name, r in results.items() if name.startswith("default:"))
+        rows.append(f"| {scenes[scene['garment']]}, {scene['motion']} | {base['sim_fps']:.2f} | {new['sim_fps']:.2f} | "
+                    f"**{new['ratio']:.2f}×** | {strain(base)} → {strain(new)} % | {penetration(base)} → {penetration(new)} % | "
+                    f"{1e3 * base['max_stiff_seam_gap']:.1f} → {1e3 * new['max_stiff_seam_gap']:.1f} mm | "
+                    f"{base['max_self_crossing_edges']:,} → {new['max_self_crossing_edges']:,} |")
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -309,6 +334,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "lines-test-unseen": ("docs/reconstruction.md", reconstruction(2)),
     "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
     "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
+    "solver-defaults": ("docs/benchmarks.md", solver_defaults),
     "memory": ("docs/benchmarks.md", memory),
     "scaling": ("docs/benchmarks.md", scaling),
     "outfit-cost": ("docs/benchmarks.md", outfit_cost),
