@@ -320,6 +320,30 @@ def solver_defaults() -> list[str]:
     return rows
 
 
+def small_steps() -> list[str]:
+    """The baseline, the default and the small-step lead on five scenes, each run several times
+    (``docs/data/benchmark_small_steps.json``, ``python benchmarks/solver_speed.py --repeats``): each
+    quality measure as its least–most over the runs."""
+    rows = ["| scene | configuration | frames / s (CPU) | ratio | strain mean / p99 / max (%) | penetration sign / winding (%) "
+            "| worst stiff-seam gap (mm) | self-crossing edges |", "|---|---|---|---|---|---|---|---|"]
+
+    def spread(r, key, scale, form):
+        low, high = (format(scale * v, form) for v in r["spread"][key])
+        return low if low == high else f"{low}–{high}"
+
+    for scene in json.loads((DATA / "benchmark_small_steps.json").read_text())["scenes"]:
+        for name, r in scene["results"].items():
+            label = "baseline" if r["ratio"] == 1.0 else "default" if name.startswith("default:") else "small steps"
+            ratio = "1" if label == "baseline" else f"**{r['ratio']:.2f}×**"
+            strain = " / ".join(spread(r, k, 100, f) for k, f in (("strain_mean", ".2f"), ("strain_p99", ".1f"),
+                                                                   ("strain_max", ".0f")))
+            penetration = " / ".join(spread(r, k, 100, ".2f") for k in ("max_penetration", "max_penetration_winding"))
+            rows.append(f"| {scene['garment'].replace('-', ' ')}, {scene['motion']} | {label} | {r['sim_fps']:.2f} | {ratio} | "
+                        f"{strain} | {penetration} | {spread(r, 'max_stiff_seam_gap', 1e3, '.1f')} | "
+                        f"{spread(r, 'max_self_crossing_edges', 1, 'd')} |")
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -335,6 +359,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
     "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
     "solver-defaults": ("docs/benchmarks.md", solver_defaults),
+    "small-steps": ("docs/benchmarks.md", small_steps),
     "memory": ("docs/benchmarks.md", memory),
     "scaling": ("docs/benchmarks.md", scaling),
     "outfit-cost": ("docs/benchmarks.md", outfit_cost),
