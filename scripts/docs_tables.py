@@ -344,6 +344,36 @@ def small_steps() -> list[str]:
     return rows
 
 
+def against_newton() -> list[str]:
+    """Ours against NVIDIA Newton's solvers on one scene (``docs/data/benchmark_newton_substeps.json``,
+    ``python benchmarks/compare_newton.py ... --newton-substeps N``; the once-a-frame VBD and the
+    XPBD rows from the previous revision's ``benchmark_newton.json``)."""
+    runs = json.loads((DATA / "benchmark_newton_substeps.json").read_text())["runs"]
+    previous = json.loads((DATA / "benchmark_newton.json").read_text())["results"]
+    ours = next(r["results"]["ours"] for r in runs.values() if "ours" in r["results"])
+
+    def quality(r):
+        penetration = 100 * r["max_penetration"]
+        return (f"{100 * r['strain_mean']:.2f} / {100 * r['strain_p99']:.1f} % | "
+                f"{penetration:.2f} %" if penetration < 1 else f"{100 * r['strain_mean']:.2f} / {100 * r['strain_p99']:.1f} % | "
+                f"{penetration:.1f} %")
+
+    rows = ["| solver | simulated frames / s (CPU) | ours / it | strain mean / p99 | max penetration | stable |",
+            "|---|---|---|---|---|---|",
+            f"| ours (defaults: XPBD 20 × 2, tethers, self-contact) | {ours['sim_fps']:.2f} | 1 | {quality(ours)} | yes |"]
+    vbd = previous["newton-vbd-no-self-contact"]
+    rows.append("| Newton VBD 10 × 10, no self-contact, contacts once a frame (its documented loop; the previous revision, "
+                f"wall time) | {vbd['sim_fps']:.3f} | - | {quality(vbd)} | yes |")
+    for run in sorted(runs.values(), key=lambda r: r["scene"]["newton_substeps"]):
+        n, r = run["scene"]["newton_substeps"], run["results"]["newton-vbd-no-self-contact"]
+        what = "no self-contact, contacts every substep" if n == 10 else "the same"
+        rows.append(f"| Newton VBD {n} × 10, {what} | {r['sim_fps']:.3f} | {ours['sim_fps'] / r['sim_fps']:.0f} | "
+                    f"{quality(r)} | yes |")
+    xpbd = previous["newton-xpbd"]
+    rows.append(f"| Newton XPBD 10 × 10 | - | - | - | - | no ({xpbd['message']}) |")
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -360,6 +390,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
     "solver-defaults": ("docs/benchmarks.md", solver_defaults),
     "small-steps": ("docs/benchmarks.md", small_steps),
+    "against-newton": ("docs/benchmarks.md", against_newton),
     "memory": ("docs/benchmarks.md", memory),
     "scaling": ("docs/benchmarks.md", scaling),
     "outfit-cost": ("docs/benchmarks.md", outfit_cost),
