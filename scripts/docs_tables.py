@@ -374,6 +374,37 @@ def against_newton() -> list[str]:
     return rows
 
 
+#: the profile's rows (benchmarks/solver_speed.py's PROFILE_ROWS) as the docs name them
+_PROFILE_LABELS = {
+    "body contact search and tracking": "body contact search and tracking (body placed and refit every substep)",
+    "constraint sweeps, contact projection, friction, velocities (one captured block)":
+        "constraint sweeps, contact projection, friction, velocities (one captured block a substep)",
+    "whole frame": "whole frame (with the profiler's overhead)",
+}
+
+
+def default_profile() -> list[str]:
+    """Where the default's time goes on the top's walk: cProfile of a copy run alongside
+    (``profile_ms_per_frame`` of ``docs/data/benchmark_solver.json``)."""
+    scene = json.loads((DATA / "benchmark_solver.json").read_text())["scenes"][0]
+    profile = next(r for name, r in scene["results"].items() if name.startswith("default:"))["profile_ms_per_frame"]
+    whole = profile["whole frame"]
+    return ["| part | ms / frame | share |", "|---|---|---|"] + [
+        f"| {_PROFILE_LABELS.get(label, label)} | {ms:.1f} | {100 * ms / whole:.0f} % |" for label, ms in profile.items()]
+
+
+def kernel_profile() -> list[str]:
+    """The default's frame on the top's walk, kernel by kernel, launch by launch (``docs/data/kernel_profile.json``,
+    ``python benchmarks/kernel_profile.py``)."""
+    profile = json.loads((DATA / "kernel_profile.json").read_text())
+    whole = profile["frame_ms_launch_by_launch"]
+    rows = ["| kernel (or BVH refit) | calls / frame | ms / frame | share |", "|---|---|---|---|"]
+    for name, k in sorted(profile["kernels"].items(), key=lambda item: -item[1]["ms_per_frame"]):
+        rows.append(f"| {name} | {k['calls_per_frame']:g} | {k['ms_per_frame']:.1f} | {100 * k['ms_per_frame'] / whole:.0f} % |")
+    rows.append(f"| whole frame, launch by launch | | {whole:.1f} | 100 % |")
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -389,6 +420,8 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
     "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
     "solver-defaults": ("docs/benchmarks.md", solver_defaults),
+    "default-profile": ("docs/benchmarks.md", default_profile),
+    "kernel-profile": ("docs/benchmarks.md", kernel_profile),
     "small-steps": ("docs/benchmarks.md", small_steps),
     "against-newton": ("docs/benchmarks.md", against_newton),
     "memory": ("docs/benchmarks.md", memory),
