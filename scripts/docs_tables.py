@@ -425,6 +425,34 @@ def posed_lines() -> list[str]:
             f"| Ours, posed | {means('rest_cm')} |"]
 
 
+def shipped_motions() -> list[str]:
+    """The shipped motions (``scenes/motions/``, made by ``python scripts/make_motions.py``), posed on
+    the bundled body: the lowest vertex per frame, its least and most over the motion; the largest
+    joint rotation below the root (degrees)."""
+    import numpy as np
+
+    from darts.body.io import load_body
+    from darts.motion.amass import load_motion
+    from darts.motion.posing import pose_sequence
+    from darts.shipped import shipped_motions
+    from scenes import MOTIONS_DIR
+
+    body = load_body()
+    rows = ["| motion | frames | fps | duration (s) | travel (m) | lowest point z (m), min / max | largest joint angle (deg) |",
+            "|---|---|---|---|---|---|---|"]
+    order = ["walk", "run", "wave", "jumping_jacks", "twist", "squat"]
+    for name in order + sorted(set(shipped_motions()) - set(order)):
+        motion = load_motion(MOTIONS_DIR / f"{name}.npz")
+        vertices, _ = pose_sequence(body, motion)
+        lowest = vertices[..., 2].min(axis=1)
+        angle = np.degrees(np.linalg.norm(motion.parts()["body_pose"][:, 1:], axis=2)).max()
+        travel = float(np.linalg.norm(motion.trans[-1, :2] - motion.trans[0, :2]))
+        low, high = (f"{v:+.3f}".replace("-", "−") for v in (lowest.min(), lowest.max()))
+        rows.append(f"| {name} | {motion.num_frames} | {motion.fps:g} | {motion.duration:.1f} | {travel:.2f} | {low} / {high} | "
+                    f"{angle:.0f} |")
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -452,6 +480,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "photo-speed": ("docs/benchmarks.md", photo_speed),
     "materials": ("docs/simulation.md", materials),
     "shipped-garments": ("docs/templates.md", shipped_garments),
+    "shipped-motions": ("docs/motions.md", shipped_motions),
     "dataset-parts": ("docs/dataset.md", dataset_parts),
     "posed-renders-before": ("docs/reconstruction.md", posed_renders("photo_posed_eval")),
     "posed-renders": ("docs/reconstruction.md", posed_renders("photo_posed_parsing")),
