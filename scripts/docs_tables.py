@@ -453,6 +453,39 @@ def shipped_motions() -> list[str]:
     return rows
 
 
+def shipped_weights() -> list[str]:
+    """The shipped networks (``darts/regress/weights/*.pt``): each checkpoint's own record (its
+    command, dataset, last epoch's validation numbers) and file size; the posed regressor's held-out
+    number from ``docs/data/posed_lines_eval.json``."""
+    import re
+
+    import torch
+
+    folder = ROOT / "darts" / "regress" / "weights"
+    rows = ["| file | made by | size | numbers |", "|---|---|---|---|"]
+    for name in ("classifier", "lines_ours", "lines_im-stm", "lines_p2m-gcn", "lines_posed"):
+        path = folder / f"{name}.pt"
+        record = torch.load(path, map_location="cpu", weights_only=False)["record"]
+        data = re.search(r"--data (\S+)", record["command"]).group(1).replace("/root/.cache", "~/.cache")
+        command = re.sub(r" --out \S+", "", record["command"]).replace("/root/.cache", "~/.cache")
+        command += "" if "--seed" in command else f" --seed {record['seed']}"
+        if "--posed" in command:
+            recipe = record["dataset"]["command"] if isinstance(record["dataset"], dict) else ""
+            command = f"`{command}` (on `{recipe.replace('OUT_DIR', data)}`)" if recipe else f"`{command}`"
+        else:
+            command = f"`{command}`"
+        if "val_accuracy" in record:
+            numbers = (f"val {100 * record['val_accuracy'][-1]:.1f} % "
+                       f"({100 * record['val_accuracy_garment_alone'][-1]:.1f} % garment alone)")
+        else:
+            numbers = f"val {record['val_chamfer_cm'][-1]:.2f} cm"
+        if name == "lines_posed":
+            held_out = json.loads((DATA / "posed_lines_eval.json").read_text())["summary"]["rest_cm_mean"]
+            numbers += f" (posed frame); held-out {held_out:.2f} cm (rest)"
+        rows.append(f"| `{path.name}` | {command} | {path.stat().st_size / 1e6:.1f} MB | {numbers} |")
+    return rows
+
+
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
@@ -467,6 +500,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "lines-test-unseen": ("docs/reconstruction.md", reconstruction(2)),
     "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
     "posed-lines": ("docs/reconstruction.md", posed_lines),
+    "shipped-weights": ("docs/reconstruction.md", shipped_weights),
     "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
     "solver-defaults": ("docs/benchmarks.md", solver_defaults),
     "default-profile": ("docs/benchmarks.md", default_profile),
