@@ -18,6 +18,7 @@ from darts.body.io import load_body  # noqa: E402
 from darts.body.segmentation import PART_NAMES, body_segmentation  # noqa: E402
 from darts.motion.amass import load_motion  # noqa: E402
 from darts.motion.posing import pose_sequence  # noqa: E402
+from darts.motion.procedural import MOTIONS  # noqa: E402
 from darts.render import WORLD_FRONT_LEFT, draw_mesh  # noqa: E402
 from scenes import MOTIONS_DIR  # noqa: E402
 
@@ -174,7 +175,7 @@ def main() -> None:
         print(f"wrote {out}/simulation.png")
         return
     body_figure(out / "default_body.png")
-    motions_figure(out / "motions.png", ["walk", "run", "wave", "jumping_jacks", "twist", "squat"])
+    motions_figure(out / "motions.png", list(MOTIONS))
     garments_figure(out / "garments.png")
     print(f"wrote {out}/default_body.png, motions.png and garments.png")
 

@@ -16,7 +16,7 @@ from darts.shipped import shipped_motions
 from scenes import MOTIONS_DIR
 from tests.helpers import random_motion_arrays, write_classic_amass_120fps
 
-SHIPPED = ["walk", "run", "wave", "jumping_jacks", "twist", "squat"]
+SHIPPED = ["walk", "run", "wave", "jumping_jacks", "twist", "squat", "sit", "kneel", "arms_down", "arms_crossed"]
 
 
 def _posed(body, path):
@@ -119,6 +119,32 @@ def test_shipped_motion_joint_angles_are_plausible(name):
     assert angles.max() < np.radians(150)
     knees = motion.body_pose[:, [4, 5], 0]  # knee flexion is a positive rotation about X
     assert knees.min() > -0.05 and knees.max() < np.radians(145)
+
+
+def test_the_deep_poses_reach_what_they_are_named_for(body):
+    """Halfway through each (the hold): sitting, the thighs horizontal (hips within 8 cm of the
+    knees' height) and the seat at a chair's height; kneeling, the knees on the floor and the thighs
+    upright; arms down, the wrists at the hips' height under the shoulders; arms crossed, each wrist past the body's middle."""
+    from darts.body.joints import BODY_JOINT_NAMES as J
+
+    def middle(name):
+        motion = load_motion(MOTIONS_DIR / f"{name}.npz")
+        _, joints = pose_sequence(body, motion)
+        return {n: joints[len(joints) // 2, J.index(n)] for n in J}
+
+    sit = middle("sit")
+    assert abs(sit["left_hip"][2] - sit["left_knee"][2]) < 0.08 and 0.35 < sit["left_hip"][2] < 0.6
+    kneel = middle("kneel")
+    assert kneel["left_knee"][2] < 0.12 and kneel["right_knee"][2] < 0.12
+    assert kneel["left_hip"][2] - kneel["left_knee"][2] > 0.3
+    down = middle("arms_down")
+    for side in ("left", "right"):  # hanging: the wrist at the hips' height, under the shoulder
+        assert down[f"{side}_wrist"][2] < down[f"{side}_hip"][2] + 0.1
+        assert np.linalg.norm(down[f"{side}_wrist"][:2] - down[f"{side}_shoulder"][:2]) < 0.15
+    crossed = middle("arms_crossed")
+    side = crossed["left_shoulder"][:2] - crossed["right_shoulder"][:2]  # points to the body's left
+    centre = 0.5 * (crossed["left_shoulder"][:2] + crossed["right_shoulder"][:2])
+    assert (crossed["left_wrist"][:2] - centre) @ side < 0 < (crossed["right_wrist"][:2] - centre) @ side
 
 
 def test_walk_stance_foot_does_not_slide(body):

@@ -156,6 +156,46 @@ def squat(t):
     return pose, rx(pelvis_pitch), 0 * t
 
 
+def sit(t):
+    """Down onto a chair's height (thighs horizontal, knees at a right angle, the back upright),
+    held, and up again: 0.8-1.8 s down, 2.8-3.8 s up."""
+    depth = smoothstep(0.8, 1.8, t) * (1 - smoothstep(2.8, 3.8, t))
+    pose = legs(t, -1.57 * depth, -1.57 * depth, 1.57 * depth, 1.57 * depth)
+    pose["spine1"] = rx(0.15 * depth * (1 - depth) * 4)  # leaning forward on the way down and up
+    pose.update(arms_down(t, 1.2, -0.35 * depth, -0.35 * depth, 0.5))
+    return pose, ry(0 * t), 0 * t
+
+
+def kneel(t):
+    """Down onto both knees (thighs upright, shins on the floor behind), held, and up: the hips fold
+    on the way down and up as a person's do."""
+    depth = smoothstep(0.8, 2.0, t) * (1 - smoothstep(2.8, 4.0, t))
+    fold = 4 * depth * (1 - depth)  # 0 standing and kneeling, 1 halfway
+    pose = legs(t, -1.0 * fold, -1.0 * fold, 1.57 * depth + 0.6 * fold, 1.57 * depth + 0.6 * fold,
+                0.6 * depth, 0.6 * depth)
+    pose["spine1"] = rx(0.25 * fold)
+    pose.update(arms_down(t, 1.2, -0.3 * fold, -0.3 * fold, 0.3))
+    return pose, ry(0 * t), 0 * t
+
+
+def walk_arms_down(t):
+    """The walk with the arms held straight down at the sides, not swinging: the sleeves pressed
+    against the torso from the armpits down."""
+    pose, root, phase = gait(t, WALK)
+    pose.update(arms_down(t, 1.45, 0.0, 0.0, 0.05))
+    return pose, root, 0 * t
+
+
+def arms_crossed(t):
+    """Standing, the arms folded across the chest, each hand past the body's middle (the left forearm
+    over the right, both against the chest), swaying a little."""
+    fold = smoothstep(0.6, 1.6, t)
+    sway = 0.08 * np.sin(2 * np.pi * (t - 1.6) / 2.0) * smoothstep(1.6, 2.0, t)
+    pose = {"left_shoulder": ry(-1.4 * fold) * rz(-1.1 * fold), "right_shoulder": ry(1.5 * fold) * rz(1.1 * fold),
+            "left_elbow": ry(-2.09 * fold), "right_elbow": ry(2.09 * fold), "spine2": ry(sway)}
+    return pose, ry(0 * t), 0 * t
+
+
 @dataclass(frozen=True)
 class MotionSpec:
     """A procedural motion: its length, its pose builder and how its feet are locked."""
@@ -173,6 +213,10 @@ MOTIONS = {
     "jumping_jacks": MotionSpec(4.0, jumping_jacks, "both"),
     "twist": MotionSpec(4.0, twist, "both"),
     "squat": MotionSpec(4.0, squat, "both"),
+    "sit": MotionSpec(4.5, sit, "both"),
+    "kneel": MotionSpec(4.5, kneel, "both"),
+    "arms_down": MotionSpec(4.0, walk_arms_down, "stance"),
+    "arms_crossed": MotionSpec(4.0, arms_crossed, "both"),
 }
 
 
