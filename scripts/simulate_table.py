@@ -4,7 +4,7 @@ print the tables of docs/simulation.md and keep the numbers in docs/data/simulat
     python scripts/simulate_table.py [--jobs 2]
 
 Table 1: default settings, every seam stiff (the DARTs' default), garment x motion (``--motions``,
-default walk and squat, the whole motion).
+default ``TABLE_MOTIONS``, the whole motion).
 Table 2: the first ``REGIME_SECONDS`` of the walk, with every seam of a garment set to one regime
 (welded, loose, repulsive, partial); partial seams are measured on their sprung part (max) and free
 part (mean).
@@ -21,6 +21,8 @@ RESULTS = ROOT / "docs" / "data" / "simulation_table.json"
 PARTIAL = RESULTS.with_suffix(".partial.jsonl")  # rows as they finish, so that a stopped run resumes
 REGIME_RUNS = ("welded", "loose", "repulsive", "partial")
 REGIME_SECONDS = 2.0
+#: table 1's motions: the walk, the squat and the deep poses where the body overlaps itself (issue 46)
+TABLE_MOTIONS = ("walk", "squat", "sit", "kneel", "arms_down", "arms_crossed")
 
 
 def run_one(job: tuple[str, str, str]) -> dict:
@@ -93,7 +95,8 @@ def main() -> None:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--jobs", type=int, default=2)
-    parser.add_argument("--motions", default="walk,squat", help="motions of table 1 (default walk,squat)")
+    parser.add_argument("--motions", default=",".join(TABLE_MOTIONS),
+                        help=f"motions of table 1 (default {','.join(TABLE_MOTIONS)})")
     parser.add_argument("--keep-regimes", action="store_true",
                         help="rerun only the garment x motion table; keep the regime rows already in the JSON")
     args = parser.parse_args()
