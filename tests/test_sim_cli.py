@@ -38,6 +38,12 @@ def test_usd_output_is_valid_animated_and_measured(run_sim, tmp_path):
     assert stats["self_contact"] is True and stats["max_self_intersections"] == 0
     assert set(frame["seam_gap"]) == {"left_side", "right_side", "waistband"}
     assert all(gap["max"] <= 1e-3 for gap in frame["seam_gap"].values())  # every seam stiff
+    # speeds: the fastest of any substep is at least the last substep's, and at least what the
+    # recorded frames show (a frame's displacement is the mean of its substeps' velocities)
+    for f in stats["frames"][1:]:
+        assert f["max_substep_speed"] >= f["max_speed"] - 1e-6
+        assert f["max_substep_speed"] >= f["frame_speed"] - 1e-4 and 0 < f["frame_speed"] < 5.0
+    assert stats["max_substep_speed"] == max(f["max_substep_speed"] for f in stats["frames"])
 
 
 def test_mesh_sequence_output(run_sim, tmp_path):

@@ -42,6 +42,15 @@ def velocities_from_positions(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtyp
     v[i] = (x[i] - x_start[i]) / dt
 
 
+@wp.kernel
+def track_fastest(v: wp.array(dtype=wp.vec3), fastest: wp.array(dtype=float)):
+    """fastest[0] = max(fastest[0], |v_i|) over the particles: the largest speed of any substep
+    (reset once a frame), which tells cloth buzzing between contacts inside the substeps from what
+    the recorded frames show."""
+    i = wp.tid()
+    wp.atomic_max(fastest, 0, wp.length(v[i]))
+
+
 @wp.func
 def inside_body(mesh: wp.uint64, p: wp.vec3, reach: float):
     """Is p inside the body, less than ``reach`` from its surface (the sign of its closest point)."""

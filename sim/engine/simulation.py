@@ -29,7 +29,9 @@ class FrameMeasure:
     them where the posed body overlaps itself (armpits, a deep squat) so that no place outside it
     exists, and by the body's winding number (inside any part, overlaps included) — the largest
     speed (m/s), whether every value is finite, and how many garment edges pass through a garment
-    triangle. ``penetration_winding`` is None unless asked for (it costs about four times the rest)."""
+    triangle. ``penetration_winding`` is None unless asked for (it costs about four times the rest).
+    ``max_substep_speed``: the largest particle speed of any substep since the frame began (m/s;
+    ``max_speed`` is the last substep's)."""
 
     penetration: float
     penetration_in_body_overlap: float
@@ -37,6 +39,7 @@ class FrameMeasure:
     max_speed: float
     finite: bool
     self_intersections: int
+    max_substep_speed: float = 0.0
 
 
 class Simulation:
@@ -82,6 +85,7 @@ class Simulation:
         if self.settings.layer_offsets and self.model.layer.max() > 0:
             self.collider.set_offset(covering_offsets(self.model, self.positions()))
         self.collider.begin_frame(body_next)
+        self.solver.fastest.zero_()
         substeps = self.settings.substeps
         dt = 1.0 / (self.settings.fps * substeps)
         for s in range(substeps):
@@ -104,7 +108,7 @@ class Simulation:
         crossings = int(self.solver.self_contact.crossing_edges().sum()) if finite else 0
         return FrameMeasure(float(inside[0]) / self.count, float(inside[1]) / self.count,
                             float(inside[2]) / self.count if winding else None,
-                            float(self._max_speed.numpy()[0]), finite, crossings)
+                            float(self._max_speed.numpy()[0]), finite, crossings, float(self.solver.fastest.numpy()[0]))
 
     def diagnose(self) -> str:
         """Which particle and constraint a blow-up starts from: the first non-finite particle (else the

@@ -73,6 +73,7 @@ class Solver:
         self.inverse_mass = float_array(1.0 / model.mass, device)
         self.faces = int_array(model.faces, device)
         self.force = wp.zeros_like(state.x)
+        self.fastest = wp.zeros(1, dtype=float, device=device)  # the largest substep speed this frame (m/s)
         self.wind = Wind(settings.wind, settings.gust, settings.seed)
         thickness = float(model.material["thickness"])
         self.self_contact = SelfContact(
@@ -129,3 +130,4 @@ class Solver:
             self.self_contact.friction(state_in.x)
         collider.friction(state_out.x, state_in.x, dt)
         self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
+        self.launch(kernels.track_fastest, self.count, [state_out.v, self.fastest])
