@@ -74,7 +74,7 @@ class Scene:
         speed = wp.zeros(1, dtype=float)
         ok = wp.ones(1, dtype=wp.int32)
         wp.launch(kernels.frame_measures, dim=len(x),
-                  inputs=[self._body.id, self._body.id, 0, xs, wp.zeros_like(xs), inside, speed, ok])
+                  inputs=[self._body.id, self._body.id, 1, 0, xs, wp.zeros_like(xs), inside, speed, ok])
         springs = self.model.springs
         gap = float(np.linalg.norm(x[springs[:, 0]] - x[springs[:, 1]], axis=1).max()) if len(springs) else 0.0
         return float(inside.numpy()[0]) / len(x), gap, finite, edge_strain(self.model, x)

@@ -64,6 +64,10 @@ def parser() -> argparse.ArgumentParser:
                    help="seam regime (welded, stiff, loose, repulsive, partial); NAME 'all' sets every seam")
     p.add_argument("--seam-curves", action="store_true", help="USD only: draw each seam pair as a curve")
     p.add_argument("--stats", metavar="stats.json", help="write per-frame measurements as JSON")
+    p.add_argument("--measure-every", type=int, default=10, metavar="N",
+                   help="query the body and the garment for penetration, crossings and layer order on every N-th "
+                        "recorded frame and the last (default 10; 1: every frame); strain, seams, waist and speeds "
+                        "are measured on every frame")
     p.add_argument("--preview", metavar="PREVIEW", help="also render preview.gif, .mp4 (needs ffmpeg) or .png "
                                                         "(body and garment, shaded, fixed camera)")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
@@ -96,6 +100,7 @@ def job_from_args(args):
     garment = args.garment[0] if len(args.garment) == 1 else list(args.garment)
     return SimJob(garment, args.motion, settings, start=args.start, end=args.end, frames=args.frames,
                   settle=args.settle, body=args.body, betas=args.betas, material=args.material, seams=tuple(args.seam),
+                  measure_every=args.measure_every,
                   output=args.output, format=args.format, seam_curves=args.seam_curves, stats=args.stats,
                   preview=args.preview)
 
@@ -115,7 +120,8 @@ def command_line(job) -> str:
             argv += [setting.flag, ",".join(f"{v:g}" for v in value) if setting.kind == "vector" else f"{value}"]
     options = [("--start", job.start, 0), ("--end", job.end, None), ("--frames", job.frames, None),
                ("--settle", job.settle, 0.5), ("--body", job.body, None), ("--material", job.material, None),
-               ("--format", job.format, "obj"), ("--stats", job.stats, None), ("--preview", job.preview, None)]
+               ("--format", job.format, "obj"), ("--stats", job.stats, None), ("--preview", job.preview, None),
+               ("--measure-every", job.measure_every, 10)]
     argv += [item for flag, value, default in options if value != default
              for item in (flag, f"{value:g}" if isinstance(value, float) else str(value))]
     if job.betas:

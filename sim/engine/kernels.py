@@ -103,18 +103,23 @@ def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3, rest_c
 
 
 @wp.kernel
-def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, winding: int, x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3),
+def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, bodies: int, winding: int, x: wp.array(dtype=wp.vec3),
+                   v: wp.array(dtype=wp.vec3),
                    inside: wp.array(dtype=wp.int32), max_speed: wp.array(dtype=float),
                    finite: wp.array(dtype=wp.int32)):
     """Per frame: particles inside the body (sign by the angle-weighted pseudo-normal at the closest
     point, exact for a closed body that does not intersect itself) in inside[0], those of them whose
     closest body point lies inside another part of the body (3 mm out along its normal is still
-    inside: the posed body overlaps itself there) in inside[1], the largest speed, any non-finite value."""
+    inside: the posed body overlaps itself there) in inside[1], the largest speed, any non-finite value.
+    ``bodies`` 0: only the speed and the finite check (no body query)."""
     i = wp.tid()
     p = x[i]
     vi = v[i]
     if not (wp.isfinite(p) and wp.isfinite(vi)):
         wp.atomic_min(finite, 0, 0)
+        return
+    wp.atomic_max(max_speed, 0, wp.length(vi))
+    if bodies == 0:
         return
     query = wp.mesh_query_point_sign_normal(mesh, p, 10.0)
     if query.result and query.sign < 0.0:
@@ -126,7 +131,6 @@ def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, winding: int, x: wp
         by_winding = wp.mesh_query_point_sign_winding_number(winding_mesh, p, 10.0)
         if by_winding.result and by_winding.sign < 0.0:
             wp.atomic_add(inside, 2, 1)
-    wp.atomic_max(max_speed, 0, wp.length(vi))
 
 
 @wp.kernel

@@ -29,16 +29,17 @@ class FrameMeasure:
     them where the posed body overlaps itself (armpits, a deep squat) so that no place outside it
     exists, and by the body's winding number (inside any part, overlaps included) — the largest
     speed (m/s), whether every value is finite, and how many garment edges pass through a garment
-    triangle. ``penetration_winding`` is None unless asked for (it costs about four times the rest).
+    triangle. ``penetration_winding`` is None unless asked for (it costs about four times the rest);
+    the body's and the crossings' measures are None when only the speeds were asked for.
     ``max_substep_speed``: the largest particle speed of any substep since the frame began (m/s;
     ``max_speed`` is the last substep's)."""
 
-    penetration: float
-    penetration_in_body_overlap: float
+    penetration: float | None
+    penetration_in_body_overlap: float | None
     penetration_winding: float | None
     max_speed: float
     finite: bool
-    self_intersections: int
+    self_intersections: int | None
     max_substep_speed: float = 0.0
 
 
@@ -93,18 +94,23 @@ class Simulation:
             self.solver.step(self.previous, self.state, self.collider, dt, self.collider.time + (s + 1) * dt, s)
         self.collider.end_frame()
 
-    def measure(self, winding: bool = False) -> FrameMeasure:
-        """What ``FrameMeasure`` holds, right now (with the winding-number penetration if ``winding``)."""
+    def measure(self, winding: bool = False, bodies: bool = True) -> FrameMeasure:
+        """What ``FrameMeasure`` holds, right now (with the winding-number penetration if ``winding``;
+        without ``bodies`` only the speeds and the finite check, which cost next to nothing)."""
         self._inside.zero_()
         self._max_speed.zero_()
         self._finite.fill_(1)
+        winding = winding and bodies
         if winding:
             self._winding.refit()
         wp.launch(kernels.frame_measures, dim=self.count,
-                  inputs=[self.collider.mesh.id, self._winding.id, int(winding), self.state.x, self.state.v, self._inside,
-                          self._max_speed, self._finite], device=self.device)
+                  inputs=[self.collider.mesh.id, self._winding.id, int(bodies), int(winding), self.state.x, self.state.v,
+                          self._inside, self._max_speed, self._finite], device=self.device)
         inside = self._inside.numpy()
         finite = bool(self._finite.numpy()[0])
+        if not bodies:
+            return FrameMeasure(None, None, None, float(self._max_speed.numpy()[0]), finite, None,
+                                float(self.solver.fastest.numpy()[0]))
         crossings = int(self.solver.self_contact.crossing_edges().sum()) if finite else 0
         return FrameMeasure(float(inside[0]) / self.count, float(inside[1]) / self.count,
                             float(inside[2]) / self.count if winding else None,
