@@ -167,6 +167,7 @@ def test_mass_spring_keeps_stiff_seams_closed(walk_track):
     assert _gaps(result, "left_side").max() <= 1 * MM and _gaps(result, "right_side").max() <= 1 * MM
 
 
+@pytest.mark.slow
 def test_runs_are_deterministic_for_a_seed(body):
     track = build_body_track(body, _walk(4), 30.0, 0.1)
     dart = load_dart(GARMENTS_DIR / "short-skirt.npz")

@@ -111,6 +111,7 @@ def test_blow_up_exits_3_and_keeps_the_good_frames(run_sim, tmp_path):
     assert stage.GetEndTimeCode() == kept - 1
 
 
+@pytest.mark.slow
 def test_preview_gif_and_png_show_the_animation(run_sim, run_darts, tmp_path):
     from PIL import Image
 

@@ -123,6 +123,7 @@ def test_template_build_is_deterministic_on_one_machine(body):
         assert np.array_equal(value, dart_arrays(again)[key]), key
 
 
+@pytest.mark.slow
 def test_edge_length_controls_resolution(body):
     coarse = make_dart("short-skirt", body, edge_length=0.02)
     fine = make_dart("short-skirt", body, edge_length=0.012)
@@ -132,6 +133,7 @@ def test_edge_length_controls_resolution(body):
     assert 0.014 < np.median(edges) < 0.026
 
 
+@pytest.mark.slow
 def test_seam_regimes_on_the_command_line(run_darts, tmp_path):
     out = tmp_path / "g.npz"
     code, _, err = run_darts("template", "short-skirt", "-o", out, "--seam", "all=repulsive", "--seam", "left_side=partial",
