@@ -216,6 +216,60 @@ def test_a_body_pickle_holding_no_array_is_one_line(make, problem, tmp_path, run
     assert problem in _one_line(code, err, tmp_path / "body.pkl")
 
 
+def _child(*args) -> subprocess.CompletedProcess:
+    """A darts command in a child process, so that a native crash (a signal, exit -11) shows as
+    such instead of killing the test run."""
+    return subprocess.run([sys.executable, "-m", "darts.cli.main", *map(str, args)], capture_output=True, text=True,
+                          timeout=300)
+
+
+@pytest.mark.parametrize("faces, problem", [
+    (np.zeros((0, 3), np.uint32), "holds 0 proper triangles"),
+    (np.array([[0, 1, 2]], np.uint32), "holds 1 proper triangles"),
+    (np.array([[0, 0, 1]] * 50, np.uint32), "holds 0 proper triangles"),
+])
+def test_a_body_without_a_surface_is_refused_not_crashed_on(faces, problem, tmp_path):
+    """Warp's mesh and the distance queries crashed (exit 139, no message) on a body with no faces."""
+    arrays = npz_arrays(BODY)
+    arrays["f"] = faces
+    np.savez(tmp_path / "body.npz", **arrays)
+    for command in (("body", "info"), ("template", "short-skirt", "-o", tmp_path / "g.npz")):
+        done = _child(*command, "--body", tmp_path / "body.npz")
+        assert done.returncode == 2 and problem in done.stderr and len(done.stderr.strip().splitlines()) == 1, done
+    assert not (tmp_path / "g.npz").exists()
+
+
+@pytest.mark.parametrize("damage, problem", [
+    (lambda m: m.indices.__setitem__(0, 10**6), "whose indices fall outside its 24x6890 shape"),
+    (lambda m: m.indptr.__setitem__(-1, 10**6), "whose CSC pointers do not fit"),
+])
+def test_a_pickled_sparse_regressor_out_of_its_shape_is_one_line(damage, problem, tmp_path):
+    """scipy's toarray() wrote outside its memory for indices out of range (exit 139)."""
+    import scipy.sparse
+
+    arrays = npz_arrays(BODY)
+    legacy = {key: arrays[key] for key in REQUIRED_KEYS}
+    regressor = scipy.sparse.csc_matrix(arrays["J_regressor"])
+    damage(regressor)
+    legacy["J_regressor"] = regressor
+    (tmp_path / "body.pkl").write_bytes(legacy_pickle(legacy))
+    done = _child("body", "info", "--body", tmp_path / "body.pkl")
+    assert done.returncode == 2 and problem in done.stderr and len(done.stderr.strip().splitlines()) == 1, done
+
+
+def test_a_pickled_sparse_regressor_reads_as_its_dense_self(tmp_path):
+    """The checked conversion gives what scipy's does, duplicates summed."""
+    import scipy.sparse
+
+    from darts.body.io import _sparse_to_dense
+
+    dense = np.random.default_rng(0).random((6, 9)) * (np.random.default_rng(1).random((6, 9)) > 0.6)
+    for matrix in (scipy.sparse.csc_matrix(dense), scipy.sparse.csr_matrix(dense), scipy.sparse.coo_matrix(dense)):
+        assert np.array_equal(_sparse_to_dense(matrix, "J_regressor", "x"), dense)
+    twice = scipy.sparse.coo_matrix(([1.0, 2.0], ([0, 0], [1, 1])), shape=(2, 2))
+    assert _sparse_to_dense(twice, "J_regressor", "x")[0, 1] == 3.0
+
+
 @pytest.mark.parametrize("content, problem", [
     (lambda: BODY.read_bytes(), "is a zip archive (an .npz?), not a pickle: name it .npz"),
     # the pickle module's message for a persistent id carries a line break

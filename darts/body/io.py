@@ -107,7 +107,7 @@ def _plain(value, key: str, source) -> np.ndarray:
     else:
         raise DartsInputError(source, f"'{key}' is a chumpy array nested more than {_CHUMPY_DEPTH} deep")
     if hasattr(value, "toarray"):  # a scipy.sparse matrix (the only class the unpickler lets through with it)
-        value = value.toarray()
+        value = _sparse_to_dense(value, key, source)
     if not isinstance(value, np.ndarray | np.generic | int | float | list | tuple):
         raise DartsInputError(source, f"'{key}' must be an array of numbers, found a {type(value).__name__}")
     try:
@@ -115,6 +115,41 @@ def _plain(value, key: str, source) -> np.ndarray:
     except (ValueError, TypeError, RecursionError) as exc:  # ragged or self-containing lists
         raise DartsInputError(source, f"'{key}' is not an array of numbers ({type(exc).__name__})") from None
     return require_real(key, array, source)
+
+
+def _sparse_to_dense(matrix, key: str, source) -> np.ndarray:
+    """A scipy sparse matrix (CSC, CSR or COO, as SMPL pickles hold) as a dense array, its structure
+    checked in numpy first: scipy's own conversion trusts the index arrays, and indices outside the
+    shape make it write outside its memory (the process dies with no message)."""
+    def refuse(problem: str):
+        raise DartsInputError(source, f"'{key}' is a sparse matrix {problem}")
+
+    try:
+        rows, cols = (int(n) for n in matrix.shape)
+        form = matrix.format
+    except (AttributeError, TypeError, ValueError):
+        refuse("without a readable shape")
+    if rows < 0 or cols < 0 or rows * cols > 10**9:
+        refuse(f"of shape {rows}x{cols}")
+    if form in ("csc", "csr"):
+        indptr, indices, data = (np.asarray(getattr(matrix, name)) for name in ("indptr", "indices", "data"))
+        major, minor = (cols, rows) if form == "csc" else (rows, cols)
+        if (indptr.ndim != 1 or len(indptr) != major + 1 or indptr[0] != 0 or np.any(np.diff(indptr) < 0)
+                or indptr[-1] != len(indices) or len(indices) != len(data)):
+            refuse(f"whose {form.upper()} pointers do not fit its {rows}x{cols} shape")
+        outer = np.repeat(np.arange(major), np.diff(indptr))
+        r, c = (indices, outer) if form == "csc" else (outer, indices)
+    elif form == "coo":
+        r, c, data = (np.asarray(getattr(matrix, name)) for name in ("row", "col", "data"))
+        if not (len(r) == len(c) == len(data)):
+            refuse("whose row, column and value arrays differ in length")
+    else:
+        refuse(f"in the {form!r} format (CSC, CSR or COO expected)")
+    if len(data) and (r.min() < 0 or r.max() >= rows or c.min() < 0 or c.max() >= cols):
+        refuse(f"whose indices fall outside its {rows}x{cols} shape")
+    dense = np.zeros((rows, cols), np.float64)
+    np.add.at(dense, (r.astype(np.int64), c.astype(np.int64)), require_real(key, np.asarray(data), source))
+    return dense
 
 
 def _read_pkl(path: Path) -> dict:
@@ -165,6 +200,9 @@ def body_arrays(arrays: dict, source, name: str | None = None) -> BodyArrays:
     faces = require_indices("f", arrays["f"], source)
     if faces.ndim != 2 or faces.shape[1] != 3 or faces.min(initial=0) < 0 or faces.max(initial=0) >= nv:
         raise DartsInputError(source, f"'f' must be [F, 3] indices into {nv} vertices")
+    proper = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+    if proper.sum() < 4:  # the least closed surface; Warp's mesh and the distance queries need a surface
+        raise DartsInputError(source, f"'f' holds {int(proper.sum())} proper triangles: a body is a surface of many")
     shapedirs = np.asarray(arrays["shapedirs"], np.float64)
     if shapedirs.ndim != 3 or shapedirs.shape[:2] != (nv, 3):
         raise DartsInputError(source, f"'shapedirs' has shape {shapedirs.shape}, expected [{nv}, 3, K]")
