@@ -166,6 +166,8 @@ def test_walk_stance_foot_does_not_slide(body):
     ("zero frames", lambda a: a.update(poses=a["poses"][:0], trans=a["trans"][:0]), "zero frames"),
     ("frame mismatch", lambda a: a.update(trans=a["trans"][:2]), "frames"),
     ("fps zero", lambda a: a.update(mocap_framerate=np.array(0.0)), "must be positive"),
+    ("fps tiny", lambda a: a.update(mocap_framerate=np.array(1e-300)), "frames/s, not a motion's"),
+    ("fps huge", lambda a: a.update(mocap_framerate=np.array(4.6e18)), "frames/s, not a motion's"),
     ("no fps", lambda a: a.pop("mocap_framerate"), "missing frame rate"),
 ])
 def test_bad_motion_files_give_one_clear_line_and_no_output(tmp_path, run_darts, problem, arrays, message):

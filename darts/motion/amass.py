@@ -19,6 +19,8 @@ from darts.fileio import read_npz, require_keys, require_real, save_npz
 NUM_BODY_JOINTS = 22  # the root plus 21 body joints, common to SMPL, SMPL-H and SMPL-X
 NUM_HAND_JOINTS = 30  # 15 per hand, left then right (MANO order)
 _FRAME_RATE_KEYS = ("mocap_framerate", "mocap_frame_rate", "frame_rate", "fps")
+#: frame rates a motion may have (frames per second): from a slow keyframed clip to high-speed capture
+FPS_RANGE = (1.0, 1000.0)
 
 
 @dataclass
@@ -95,6 +97,9 @@ def _frame_rate(arrays: dict, path) -> float:
             fps = float(value.reshape(()))
             if not np.isfinite(fps) or fps <= 0:
                 raise DartsInputError(path, f"frame rate '{key}' must be positive, found {fps}")
+            if not FPS_RANGE[0] <= fps <= FPS_RANGE[1]:
+                raise DartsInputError(path, f"frame rate '{key}' is {fps:g} frames/s, not a motion's "
+                                            f"({FPS_RANGE[0]:g} to {FPS_RANGE[1]:g})")
             return fps
     raise DartsInputError(path, f"missing frame rate (one of {', '.join(_FRAME_RATE_KEYS)})")
 
