@@ -163,7 +163,10 @@ def simulate(garment, motion, settings: SimSettings | None = None, *, keep_frame
 def _frame_range(job: SimJob, count: int) -> tuple[int, int]:
     end = job.end if job.end is not None else count
     if job.frames is not None:
-        end = min(count, job.start + job.frames)
+        end = job.start + job.frames
+        if end > count and job.start < count:  # asked for more than the motion has: say so, do not cut it short
+            raise DartsInputError(None, f"frames {job.frames} from frame {job.start} run past the motion's end: it has "
+                                        f"{count} frames at {job.settings.fps:g} fps, {count - job.start} left from there")
     if not 0 <= job.start < end <= count:
         raise DartsInputError(None, f"frame range [{job.start}, {end}) is empty or outside the motion's {count} frames "
                                     f"at {job.settings.fps:g} fps")

@@ -82,6 +82,8 @@ def test_classic_amass_120fps_file_simulates_at_30fps(run_sim, tmp_path):
     (("short-skirt", "walk", "--seam", "left_side=loose:-5"), "stiffness must be"),
     (("short-skirt", "walk", "--fps", 0), "fps must be > 0"),
     (("short-skirt", "walk", "--start", 500), "frame range"),
+    # the walk has 121 frames at 30 fps: five from 119 would be cut to two without a word
+    (("short-skirt", "walk", "--start", 119, "--frames", 5), "run past the motion's end: it has 121 frames at 30 fps, 2 left"),
     (("missing.npz", "walk"), "missing.npz"),
 ])
 def test_bad_input_is_one_line_exit_2_and_no_output(run_sim, tmp_path, args, message):
