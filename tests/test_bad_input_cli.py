@@ -257,6 +257,16 @@ def test_a_pickled_sparse_regressor_out_of_its_shape_is_one_line(damage, problem
     assert done.returncode == 2 and problem in done.stderr and len(done.stderr.strip().splitlines()) == 1, done
 
 
+def test_pose_correctives_stored_as_an_object_array_are_refused_not_dropped(tmp_path, run_darts):
+    """An optional key the reader cannot take (an object array would need pickle) was left out
+    without a word, so the body posed without its correctives."""
+    arrays = npz_arrays(BODY)
+    arrays["posedirs"] = np.array([np.zeros((6890, 3, 207))], dtype=object)
+    np.savez(tmp_path / "body.npz", **arrays)
+    code, _, err = run_darts("body", "info", "--body", tmp_path / "body.npz")
+    assert "'posedirs' is an object array" in _one_line(code, err, tmp_path / "body.npz")
+
+
 def test_a_pickled_sparse_regressor_reads_as_its_dense_self(tmp_path):
     """The checked conversion gives what scipy's does, duplicates summed."""
     import scipy.sparse

@@ -214,6 +214,9 @@ def body_arrays(arrays: dict, source, name: str | None = None) -> BodyArrays:
     if regressor.shape != (nj, nv):
         raise DartsInputError(source, f"'J_regressor' has shape {regressor.shape}, expected [{nj}, {nv}]")
     parents = _parents_from_kintree(require_indices("kintree_table", arrays["kintree_table"], source), nj, source)
+    refused = getattr(arrays, "refused", {})
+    if "posedirs" in refused:  # optional, but given: taking it as absent would pose without correctives unsaid
+        raise DartsInputError(source, f"'posedirs' is {refused['posedirs']}: give it as an array of numbers, or leave it out")
     posedirs = arrays.get("posedirs")
     if posedirs is not None:
         posedirs = np.asarray(posedirs, np.float64)
