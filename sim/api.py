@@ -222,8 +222,14 @@ def _load_garments(job: SimJob) -> _Dressing:
         if owner and owner not in names:
             raise DartsInputError(None, f"seam setting '{text}': no garment '{owner}' (garments: {', '.join(names)})")
         chosen = [d for d, n in zip(darts, names) if n == owner or (not owner and (seam == "all" or seam in d.seam_names))]
+        if owner and seam != "all" and seam not in chosen[0].seam_names:
+            raise DartsInputError(None, f"seam setting '{text}': {owner} has no seam '{seam}' "
+                                        f"(its seams: {', '.join(chosen[0].seam_names)})")
+        if not chosen and len(darts) > 1:
+            raise DartsInputError(None, f"seam setting '{text}': no garment of the outfit has a seam '{seam}' ("
+                                        + "; ".join(f"{n}: {', '.join(d.seam_names)}" for d, n in zip(darts, names)) + ")")
         if not chosen:
-            darts[0].seam(seam)  # no garment has it: the error names the seams there are
+            darts[0].seam(seam)  # the garment has no such seam: the error names the seams it has
         for dart in chosen:
             dart.set_seam(seam, regime, stiffness)
     return _Dressing(darts, names)

@@ -252,3 +252,17 @@ def test_edges_through_the_other_garment_are_counted():
     corner = (through[outer, 0] > 0.05) & (through[outer, 1] > 0.05)
     through[np.flatnonzero(corner) + outer.start, 2] = -0.01  # a corner of the outer sheet pushed through
     assert layer_crossings(outfit, through)["outer x inner"] > 0
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("long_sleeve_top/waistband=loose", "long_sleeve_top has no seam 'waistband' (its seams: "),
+    ("nosuch=loose", "no garment of the outfit has a seam 'nosuch' (long_pants: "),
+    ("shirt/left_side=loose", "no garment 'shirt' (garments: long_pants, long_sleeve_top)"),
+])
+def test_an_outfits_seam_setting_says_which_garment_lacks_the_seam(setting, message):
+    import sim
+    from darts.errors import DartsInputError
+
+    with pytest.raises(DartsInputError) as error:
+        sim.simulate(["long-pants", "long-sleeve-top"], "walk", seams=(setting,), frames=1)
+    assert message in str(error.value)
