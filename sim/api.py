@@ -244,7 +244,14 @@ def _load_motion(job: SimJob):
 
 
 def _shape(job: SimJob, dart, body) -> tuple[np.ndarray, np.ndarray]:
-    """(the DART's own betas, the betas to simulate on), checked against the body."""
+    """(the DART's own betas, the betas to simulate on), checked against the body: a DART made for
+    another body model (``Dart.body_model`` against the body's name) is refused, not draped on a
+    body it was not cut for."""
+    source = job.garment if isinstance(job.garment, (str, os.PathLike)) else None
+    name = getattr(body, "name", None)
+    if name and dart.body_model and dart.body_model != name:
+        raise DartsInputError(source, f"was made for the body '{dart.body_model}', and the run's body is '{name}': "
+                                      "give --body the file it was made on")
     own = np.asarray(dart.body_betas, np.float64)
     if len(own) > body.num_betas:
         raise DartsInputError(job.garment if isinstance(job.garment, (str, os.PathLike)) else None,

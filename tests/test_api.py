@@ -75,3 +75,17 @@ def test_bad_input_raises_one_clear_error(call, problem):
     with pytest.raises(DartsInputError) as error:
         call()
     assert problem in str(error.value) and "\n" not in str(error.value)
+
+
+def test_a_garment_made_for_another_body_is_refused_with_the_body_it_needs(tmp_path):
+    """A DART cut on another body model is not draped on the default body without a word: the run
+    says which body it was made for; given that body, it runs."""
+    from darts.body.io import export_smpl_npz, read_body
+
+    export_smpl_npz(read_body(), tmp_path / "small.npz", betas=[-2.0])
+    skirt = darts.template("short-skirt", body=tmp_path / "small.npz", edge_length=0.03)
+    assert skirt.body_model == "small"
+    with pytest.raises(darts.DartsInputError, match="was made for the body 'small', and the run's body is 'darts-default-v1'"):
+        sim.simulate(skirt, "walk", frames=1, settle=0.0)
+    run = sim.simulate(skirt, "walk", frames=1, settle=0.0, body=str(tmp_path / "small.npz"))
+    assert run.stable and run.garment.shape[0] == 1
