@@ -65,6 +65,9 @@ def test_an_outfit_is_one_job_of_its_garments(tmp_path):
     spec.write_text('[sweep]\ngarments = [["long-pants", "no-such-top"]]\nmotions = ["walk"]\n')
     with pytest.raises(DartsInputError, match="no-such-top"):
         load_jobs(spec)
+    spec.write_text('[sweep]\ngarments = [["long-pants", ["long-sleeve-top"]]]\nmotions = ["walk"]\n')
+    with pytest.raises(DartsInputError, match="not a list of lists"):
+        load_jobs(spec)
 
 
 @pytest.mark.slow

@@ -131,6 +131,10 @@ class _Checker:
         if isinstance(value, list):
             if not value:
                 self.fail(where, "an outfit must list at least one garment")
+            nested = next((item for item in value if not isinstance(item, str)), None)
+            if nested is not None:
+                self.fail(where, f"an outfit lists garment names or files, inner layer first; found {nested!r} "
+                                 "among them (an outfit is one list, not a list of lists)")
             return tuple(self.input_path(item, where, "garment") for item in value)
         return self.input_path(value, where, "garment")
 
