@@ -121,8 +121,10 @@ def test_a_weaker_detection_is_taken_only_with_a_sure_person(monkeypatch):
 
     def run(candidates):
         detections = {c[0]: c for c in candidates}
-        monkeypatch.setattr(person_module, "detect_people", lambda image, min_score=None: [
-            SimpleNamespace(score=c[0]) for c in candidates if c[0] >= (min_score or 0.5)])
+        # the detector's outputs stand for the candidates; decoding keeps those at the bar asked for
+        monkeypatch.setattr(person_module, "_detector_outputs", lambda image: (candidates,))
+        monkeypatch.setattr(person_module, "decode", lambda found, min_score=0.5: [
+            SimpleNamespace(score=c[0]) for c in found if c[0] >= min_score])
         monkeypatch.setattr(person_module, "person_in", lambda image, d: SimpleNamespace(
             presence=detections[d.score][1], mask=detections[d.score][2], score=d.score))
         return person_module.find_person(np.zeros((40, 40, 3), np.uint8))

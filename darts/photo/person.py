@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from scipy.special import expit
 
-from darts.photo.detector import INPUT, Detection, Region, decode, letterbox
+from darts.photo.detector import INPUT, MIN_SCORE, Detection, Region, decode, letterbox
 
 MODELS = Path(__file__).parent / "models"
 CROP = 256
@@ -100,9 +100,15 @@ def _run(name: str, tensor: np.ndarray) -> dict[str, np.ndarray]:
     return {d["name"]: interpreter.get_tensor(d["index"])[0] for d in interpreter.get_output_details()}
 
 
-def detect_people(image: np.ndarray, min_score: float | None = None) -> list[Detection]:
+def detect_people(image: np.ndarray, min_score: float = MIN_SCORE) -> list[Detection]:
     """Every person the detector finds in ``image`` [H,W,3] uint8 scoring at least ``min_score``
     (default: the detector's ``MIN_SCORE``), best first."""
+    return decode(*_detector_outputs(image), min_score)
+
+
+def _detector_outputs(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """The detector model's boxes [2254,12] and logits [2254] on ``image`` letterboxed, and the
+    picture's width and height (``decode``'s arguments)."""
     from PIL import Image
 
     height, width = image.shape[:2]
@@ -113,8 +119,7 @@ def detect_people(image: np.ndarray, min_score: float | None = None) -> list[Det
     x0, y0 = int(round(dx)), int(round(dy))
     tensor[y0:y0 + size[1], x0:x0 + size[0]] = np.asarray(small, np.float32) / 127.5 - 1.0
     out = _run("pose_detection.tflite", tensor[None])
-    return decode(out["Identity"], out["Identity_1"][:, 0], width, height,
-                  *(() if min_score is None else (min_score,)))
+    return out["Identity"], out["Identity_1"][:, 0], width, height
 
 
 def person_in(image: np.ndarray, detection: Detection) -> Person:
@@ -155,12 +160,13 @@ def find_person(image: np.ndarray) -> Person | None:
     """The most confident person in ``image`` [H,W,3] uint8: the detector's best detection when the
     landmark model says its region holds a person; else the next candidates (``CANDIDATES``, module
     constants) at a stricter presence; None when none holds one."""
-    people = detect_people(image)
+    outputs = _detector_outputs(image)  # the network once; its outputs decoded at both bars
+    people = decode(*outputs)
     if people:
         person = person_in(image, people[0])
         if person.presence >= MIN_PRESENCE:
             return person
-    for detection in detect_people(image, CANDIDATE_SCORE)[:CANDIDATES]:
+    for detection in decode(*outputs, CANDIDATE_SCORE)[:CANDIDATES]:
         person = person_in(image, detection)
         if person.presence >= CANDIDATE_PRESENCE and mask_crispness(person.mask) >= CANDIDATE_CRISPNESS:
             return person
