@@ -106,15 +106,14 @@ class Simulation:
         wp.launch(kernels.frame_measures, dim=self.count,
                   inputs=[self.collider.mesh.id, self._winding.id, int(bodies), int(winding), self.state.x, self.state.v,
                           self._inside, self._max_speed, self._finite], device=self.device)
-        inside = self._inside.numpy()
         finite = bool(self._finite.numpy()[0])
+        speeds = {"max_speed": float(self._max_speed.numpy()[0]), "max_substep_speed": float(self.solver.fastest.numpy()[0])}
         if not bodies:
-            return FrameMeasure(None, None, None, float(self._max_speed.numpy()[0]), finite, None,
-                                float(self.solver.fastest.numpy()[0]))
+            return FrameMeasure(None, None, None, finite=finite, self_intersections=None, **speeds)
+        inside = self._inside.numpy() / self.count
         crossings = int(self.solver.self_contact.crossing_edges().sum()) if finite else 0
-        return FrameMeasure(float(inside[0]) / self.count, float(inside[1]) / self.count,
-                            float(inside[2]) / self.count if winding else None,
-                            float(self._max_speed.numpy()[0]), finite, crossings, float(self.solver.fastest.numpy()[0]))
+        return FrameMeasure(float(inside[0]), float(inside[1]), float(inside[2]) if winding else None, finite=finite,
+                            self_intersections=crossings, **speeds)
 
     def diagnose(self) -> str:
         """Which particle and constraint a blow-up starts from: the first non-finite particle (else the
