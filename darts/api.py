@@ -2,7 +2,8 @@
 path or shipped name, templates built, garments deformed and reconstructed, as the commands do.
 
 Every function takes a path, a shipped name or the object itself, validates it once (a
-``DartsInputError`` naming the file and the problem), and returns plain objects and numpy arrays:
+``DartsInputError`` naming the file and the problem; an argument of the wrong type or out of range
+raises one naming the argument, ``darts.arguments``), and returns plain objects and numpy arrays:
 ``BodyModel``, ``Motion``, ``Dart``. Frames: garments and bodies at rest are in the canonical frame
 (Y up); posed bodies are in the AMASS world frame (Z up); metres throughout. Simulation is
 ``sim.simulate`` (``darts`` itself never imports the simulator).
@@ -16,9 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
+from darts import arguments as check
 from darts.errors import DartsInputError
 from darts.shipped import resolve_garment, resolve_motion
-from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH
+from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH, EDGE_LENGTH_RANGE
 
 PathLike = str | os.PathLike
 
@@ -29,16 +31,21 @@ def load_body(body=None):
     from darts.body.io import load_body as load
     from darts.body.model import BodyModel
 
+    if body is None:
+        return load(None)
+    check.path_or(body, "body", (BodyModel,), "None, a path or a BodyModel")
     return body if isinstance(body, BodyModel) else load(body)
 
 
 def load_motion(motion, fps: float | None = None):
     """The AMASS-format ``Motion`` of a ``.npz`` path or a shipped name (``walk``, ``squat`` ...),
     resampled to ``fps`` when given."""
-    from darts.motion.amass import Motion
+    from darts.motion.amass import FPS_RANGE, Motion
     from darts.motion.amass import load_motion as load
-    from darts.motion.resample import resample
+    from darts.motion.resampling import resample
 
+    check.path_or(motion, "motion", (Motion,), "a path, a shipped motion's name or a Motion")
+    fps = check.optional_number(fps, "fps", *FPS_RANGE)
     motion = motion if isinstance(motion, Motion) else load(resolve_motion(motion))
     if fps is not None and abs(motion.fps - fps) > 1e-9:
         motion = resample(motion, fps)
@@ -50,14 +57,19 @@ def load_garment(garment):
     from darts.dart.io import load_dart
     from darts.dart.model import Dart
 
+    check.path_or(garment, "garment", (Dart,), "a path, a shipped garment's name or a Dart")
     return garment if isinstance(garment, Dart) else load_dart(resolve_garment(garment))
 
 
 def save_garment(garment, path: PathLike) -> Path:
     """Write ``garment`` (a ``Dart``) to ``path`` (``.npz``; checked, written atomically)."""
     from darts.dart.io import save_dart
+    from darts.dart.model import Dart
     from darts.fileio import check_output
 
+    if not isinstance(garment, Dart):
+        raise check.refuse("garment", "a Dart", garment)
+    path = check.path_or(path, "path")
     path = check_output(path, (".npz",))
     save_dart(garment, path)
     return path
@@ -66,7 +78,7 @@ def save_garment(garment, path: PathLike) -> Path:
 def pose(motion, body=None, betas: Sequence[float] | None = None, ground: bool = False,
          progress: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The body posed by ``motion``: vertices [F,V,3] and joints [F,J,3] (float32, world frame, Z
-    up, metres); ``betas`` the shape (default: the motion's own, else the mean shape); ``ground``
+    up, metres); ``betas`` the shape, [K] or one per frame [F,K] (default: the motion's own, else the mean shape); ``ground``
     shifts the sequence so that its lowest point touches z = 0."""
     from darts.motion.posing import pose_sequence
 
@@ -82,10 +94,12 @@ def template(category: str, body=None, betas: Sequence[float] | None = None, edg
     from darts.dart.model import parse_seam_setting
     from darts.templates.categories import CATEGORIES
 
-    if category not in CATEGORIES:
-        raise DartsInputError(None, f"unknown category '{category}' (one of {', '.join(CATEGORIES)})")
-    settings = [parse_seam_setting(text) for text in seams]
-    return make_dart(category, load_body(body), betas, edge_length, settings, list(accessories), material)
+    check.text(category, "category", CATEGORIES)
+    edge_length = check.number(edge_length, "edge_length", *EDGE_LENGTH_RANGE)
+    settings = [parse_seam_setting(text) for text in check.text_list(seams, "seams", "all=loose")]
+    accessories = check.text_list(accessories, "accessories", "collar")
+    check.text(material, "material")
+    return make_dart(category, _body_for(body, betas), betas, edge_length, settings, list(accessories), material)
 
 
 def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None, camera=None,
@@ -106,13 +120,17 @@ def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None,
     from darts.crdl.targets import edit_targets, parse_edit, read_target_lines, target_lines
     from darts.templates.defaults import DEFAULT_EASE
 
+    edits = check.text_list(edits, "edits", "hem=0.1")
+    if lines is not None and not isinstance(lines, dict):
+        check.path_or(lines, "lines", what="None, a lines.npz path or a dict of line name -> [K,3] loop")
     if (lines is None) == (not edits):
         raise DartsInputError(None, "deform needs either target lines or one or more edits NAME=METRES")
     if (mask is None) != (camera is None):
         raise DartsInputError(None, "a mask and its camera go together")
-    if solver not in SOLVERS:
-        raise DartsInputError(None, f"unknown CRDL solver '{solver}' (one of {', '.join(SOLVERS)})")
-    check_silhouette(silhouette)
+    check.text(solver, "solver", SOLVERS)
+    silhouette_weight = check.optional_number(silhouette_weight, "silhouette_weight", 0.0)
+    progress = check.switch(progress, "progress")
+    check_silhouette(check.text(silhouette, "silhouette"))
     dart = load_garment(garment)
     model = load_body(body)
     if model.name != dart.body_model:
@@ -120,9 +138,13 @@ def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None,
                               f"was made for the body '{dart.body_model}', not '{model.name}' (pass that body)")
     term = None
     if mask is not None:
-        camera = camera if isinstance(camera, Camera) else Camera.from_json(camera)
+        camera = camera if isinstance(camera, Camera) else Camera.from_json(
+            check.path_or(camera, "camera", (Camera,), "a Camera or a camera.json path"))
         if not isinstance(mask, np.ndarray):
-            mask = read_mask(mask, camera.width, camera.height)
+            mask = read_mask(check.path_or(mask, "mask", what="a mask picture's path or an [H,W] bool array"),
+                             camera.width, camera.height)
+        elif mask.shape != (camera.height, camera.width):
+            raise DartsInputError(None, f"the mask is {_size(mask.shape)}, the camera's picture {camera.width}x{camera.height}")
         elif not mask.any():
             raise DartsInputError(None, "the mask is empty (no garment pixel)")
         term = silhouette_term(silhouette, np.asarray(mask, bool), camera)
@@ -149,7 +171,7 @@ def read_picture(image):
         if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
             raise DartsInputError(None, f"an image array must be [H,W,3] uint8, got {image.shape} {image.dtype}")
         return image
-    return read_image(image)
+    return read_image(check.path_or(image, "image", what="a picture's path or an [H,W,3] uint8 array"))
 
 
 def classify(image, mask=None) -> list[tuple[str, float]]:
@@ -209,6 +231,9 @@ def reconstruct_outfit(image, body=None, garments: Sequence[str] | None = None, 
     from darts.photo.outfit import KINDS
     from darts.regress.pipeline import reconstruct_outfit as run
 
+    garments = None if garments is None else check.text_list(garments, "garments", "upper")
+    lengths, progress = check.switch(lengths, "lengths"), check.switch(progress, "progress")
+    silhouette_weight = check.optional_number(silhouette_weight, "silhouette_weight", 0.0)
     wrong = [g for g in garments or [] if g not in KINDS]
     if wrong:
         raise DartsInputError(None, f"garments must be of {', '.join(KINDS)}, got {', '.join(map(repr, wrong))}")
@@ -225,16 +250,15 @@ def _check_fit_options(silhouette: str, edge_length: float) -> None:
     """The silhouette term's name and the template's edge length of a reconstruction, checked."""
     from darts.crdl import check_silhouette
 
-    check_silhouette(silhouette)
-    if not 0.003 <= edge_length <= 0.1:
-        raise DartsInputError(None, f"edge length must be in [0.003, 0.1] m, got {edge_length}")
+    check_silhouette(check.text(silhouette, "silhouette"))
+    check.number(edge_length, "edge_length", *EDGE_LENGTH_RANGE)
 
 
 def _body_for(body, betas):
-    """The ``BodyModel`` of ``body``, checked to have room for ``betas``."""
+    """The ``BodyModel`` of ``body``, checked to have room for ``betas`` (a list of numbers)."""
     model = load_body(body)
-    if betas is not None and len(betas) > model.num_betas:
-        raise DartsInputError(None, f"{len(betas)} betas given, the body has {model.num_betas}")
+    if betas is not None:
+        check.betas(betas, model.num_betas)
     return model
 
 
@@ -259,14 +283,20 @@ def _refuse(image, problem: str | None) -> None:
     raise DartsInputError(None, f"the picture {problem}")
 
 
+def _size(shape: tuple) -> str:
+    """An array's shape as a picture's size, WIDTHxHEIGHT (or the shape when it is not [H,W])."""
+    return f"{shape[1]}x{shape[0]}" if len(shape) == 2 else f"of shape {shape} (not [H,W])"
+
+
 def _picture_mask(mask, picture: np.ndarray):
+    """``mask`` (None, a path or an [H,W] array the size of ``picture``) as a bool array, or None."""
     from darts.crdl.silhouette import read_mask
 
     if mask is None or isinstance(mask, np.ndarray):
         if mask is not None and mask.shape != picture.shape[:2]:
-            raise DartsInputError(None,
-                                  f"the mask is {mask.shape[1]}x{mask.shape[0]}, the image {picture.shape[1]}x{picture.shape[0]}")
+            raise DartsInputError(None, f"the mask is {_size(mask.shape)}, the image {picture.shape[1]}x{picture.shape[0]}")
         return None if mask is None else np.asarray(mask, bool)
+    check.path_or(mask, "mask", what="None, a mask picture's path or an [H,W] bool array")
     return read_mask(mask, picture.shape[1], picture.shape[0], "the image")
 
 
@@ -291,18 +321,21 @@ def reconstruct(image, category: str | None = None, camera=None, mask=None, body
     from darts.regress.pipeline import reconstruct as run
     from darts.templates.categories import CATEGORIES
 
-    if category is not None and category not in CATEGORIES:
-        raise DartsInputError(None, f"unknown category '{category}' (one of {', '.join(CATEGORIES)})")
+    if category is not None:
+        check.text(category, "category", CATEGORIES)
+    accept_low_confidence = check.switch(accept_low_confidence, "accept_low_confidence")
+    lengths, progress = check.switch(lengths, "lengths"), check.switch(progress, "progress")
+    silhouette_weight = check.optional_number(silhouette_weight, "silhouette_weight", 0.0)
     if garment is not None:
         from darts.photo.outfit import A_KIND, KIND_OF, KINDS
 
-        if garment not in KINDS:
-            raise DartsInputError(None, f"garment must be one of {', '.join(KINDS)}, got {garment!r}")
+        check.text(garment, "garment", KINDS)
         if category is not None and KIND_OF[category] != garment:
             raise DartsInputError(None, f"category {category} is {A_KIND[KIND_OF[category]]}, not {A_KIND[garment]}")
     _check_fit_options(silhouette, edge_length)
     picture = read_picture(image)
-    source = None if camera is None or isinstance(camera, Camera) else camera
+    source = None if camera is None or isinstance(camera, Camera) else check.path_or(
+        camera, "camera", what="None, a Camera or a camera.json path")
     if source is not None:
         camera = Camera.from_json(source)
     if camera is not None and (camera.width, camera.height) != (picture.shape[1], picture.shape[0]):

@@ -188,9 +188,10 @@ def read_image(path: str | os.PathLike, mode: str = "RGB") -> np.ndarray:
 
 def check_output(path: str | os.PathLike, suffixes: tuple[str, ...] | None = None, directory: bool = False) -> Path:
     """``path`` as a Path, or a DartsInputError if the output cannot be written there: a suffix not
-    in ``suffixes``, an existing directory (a file when ``directory``: the output is a folder), a
-    parent that is a file, or a folder where a file cannot be created (tried: permissions, read-only
-    or virtual file systems such as /proc). Called for every output before a long run starts."""
+    in ``suffixes``, an existing directory (a file when ``directory``: the output is a folder, and
+    then not the working directory or one above it, which it would replace), a parent that is a
+    file, or a folder where a file cannot be created (tried: permissions, read-only or virtual file
+    systems such as /proc). Called for every output before a long run starts."""
     path = Path(path)
     if suffixes is not None and path.suffix.lower() not in suffixes:
         raise DartsInputError(path, f"must end in {', '.join(suffixes)}")
@@ -198,6 +199,9 @@ def check_output(path: str | os.PathLike, suffixes: tuple[str, ...] | None = Non
         raise DartsInputError(path, "is a directory")
     if directory and path.exists() and not path.is_dir():
         raise DartsInputError(path, "exists and is not a directory (this output is a folder)")
+    if directory and path.resolve() in (Path.cwd(), *Path.cwd().parents):
+        raise DartsInputError(path, "is the working directory or one above it, which this folder output would "
+                                    "replace; name a folder of its own")
     parent = path.absolute().parent
     existing = next(p for p in [parent, *parent.parents] if p.exists() or p.is_symlink())
     if not existing.is_dir():
@@ -283,7 +287,8 @@ def read_npz(path: str | os.PathLike) -> NpzArrays:
     path = check_input_file(path, ".npz archive")
     try:
         archive = zipfile.ZipFile(path)
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError, ValueError) as exc:
+    # NotImplementedError: zipfile's answer to a header asking for a zip version it lacks (a damaged byte)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError, ValueError, NotImplementedError) as exc:
         raise DartsInputError(path, f"not a valid .npz archive ({exc})") from None
     arrays, budget = NpzArrays(), MAX_INPUT_BYTES
     with archive:

@@ -487,7 +487,13 @@ def shipped_weights() -> list[str]:
 
 
 #: table name -> (the Markdown file it lives in, the function that writes its rows)
+def fuzz() -> list[str]:
+    """The fuzz run (``docs/data/fuzz.json``, written by ``python scripts/fuzz_report.py``)."""
+    return _script("fuzz_report").table(json.loads((DATA / "fuzz.json").read_text()))
+
+
 TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
+    "fuzz": ("docs/api.md", fuzz),
     "sim-settings": ("docs/simulation.md", sim_settings),
     "photo-outfits": ("docs/reconstruction.md", photo_outfits),
     "import": ("docs/import.md", imports),

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from darts import arguments as check
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path, check_output
 from exporters.sequence import SEQUENCE_FORMATS
@@ -47,7 +48,7 @@ class SimJob:
 
     garment: object
     motion: object
-    settings: SimSettings = field(default_factory=SimSettings)
+    settings: SimSettings = field(default_factory=SimSettings)  # or a dict of its fields
     start: int = 0
     end: int | None = None
     frames: int | None = None
@@ -64,27 +65,43 @@ class SimJob:
     winding: bool | None = None
     measure_every: int = 10
 
+    def __post_init__(self):
+        """Every value's type checked (``darts.arguments``: a DartsInputError naming the field) and
+        normalised: ``settings`` given as a dict becomes a ``SimSettings``, sequences become tuples."""
+        self.settings = settings_of(self.settings)
+        garments = self.garment if isinstance(self.garment, (list, tuple)) else [self.garment]
+        if not garments:
+            raise DartsInputError(None, "garment: an outfit needs at least one garment")
+        for garment in garments:
+            _check_object(garment, "garment", "darts.dart.model", "Dart", "a path, a shipped garment's name or a Dart")
+        _check_object(self.motion, "motion", "darts.motion.amass", "Motion", "a path, a shipped motion's name or a Motion")
+        if self.body is not None:
+            _check_object(self.body, "body", "darts.body.model", "BodyModel", "None, a path or a BodyModel")
+        self.start = check.number(self.start, "start", 0, whole=True)
+        self.end = check.optional_number(self.end, "end", 1, whole=True)
+        self.frames = check.optional_number(self.frames, "frames", 1, whole=True)
+        self.settle = check.number(self.settle, "settle", 0)
+        self.betas = None if self.betas is None else check.number_list(self.betas, "betas")
+        self.material = None if self.material is None else check.text(self.material, "material")
+        self.seams = check.text_list(self.seams, "seams", "all=loose")
+        for name in ("output", "stats", "preview"):
+            if getattr(self, name) is not None:
+                check.path_or(getattr(self, name), name, what="None or a path")
+        self.format = check.text(self.format, "format", SEQUENCE_FORMATS)
+        self.seam_curves = check.switch(self.seam_curves, "seam_curves")
+        self.winding = None if self.winding is None else check.switch(self.winding, "winding")
+        self.measure_every = check.number(self.measure_every, "measure_every", 1, whole=True)
+
     def check(self) -> SimSettings:
         """The settings resolved (``sim.engine.solvers.resolved_settings``) after every value of the job is
         checked; DartsInputError naming the first bad one, and every output checked writable."""
-        try:
-            settings = resolved_settings(self.settings)
-        except ValueError as exc:
-            raise DartsInputError(None, str(exc)) from None
-        if not (np.isfinite(self.settle) and self.settle >= 0):
-            raise DartsInputError(None, f"settle must be >= 0 seconds, got {self.settle}")
-        if isinstance(self.measure_every, bool) or not isinstance(self.measure_every, int) or self.measure_every < 1:
-            raise DartsInputError(None, f"measure every must be a whole number >= 1, got {self.measure_every}")
-        if self.frames is not None and self.frames < 1:
-            raise DartsInputError(None, f"frames must be >= 1, got {self.frames}")
+        settings = resolved_settings(self.settings)
         from darts.dart.model import MATERIALS, parse_seam_setting
 
         if self.material is not None and self.material not in MATERIALS:
             raise DartsInputError(None, f"unknown material '{self.material}' (one of {', '.join(sorted(MATERIALS))})")
         for text in self.seams:
             parse_seam_setting(text)
-        if self.format not in SEQUENCE_FORMATS:
-            raise DartsInputError(None, f"format must be one of {', '.join(SEQUENCE_FORMATS)}, got {self.format!r}")
         self._check_outputs()
         return settings
 
@@ -113,14 +130,28 @@ class SimJob:
 
     @classmethod
     def from_dict(cls, values: dict) -> SimJob:
-        """The inverse of ``to_dict``."""
-        values = dict(values)
-        settings = dict(values.pop("settings", {}))
-        for key in ("gravity", "wind"):
-            if key in settings:
-                settings[key] = tuple(settings[key])
-        values["seams"] = tuple(values.get("seams", ()))
-        return cls(settings=SimSettings(**settings), **values)
+        """The inverse of ``to_dict`` (a DartsInputError naming a missing or unknown key, or a bad value)."""
+        values = check.mapping(values, "job", [f.name for f in fields(cls)], "SimJob's fields")
+        missing = [name for name in ("garment", "motion") if name not in values]
+        if missing:
+            raise DartsInputError(None, f"job: '{missing[0]}' is missing")
+        return cls(**values)
+
+
+def settings_of(value) -> SimSettings:
+    """``value`` as ``SimSettings``: itself, or a dict of its fields (unknown ones named)."""
+    if isinstance(value, SimSettings):
+        return value
+    return SimSettings(**check.mapping(value, "settings", [f.name for f in fields(SimSettings)], "SimSettings fields"))
+
+
+def _check_object(value, argument: str, module: str, kind: str, what: str) -> None:
+    """``value`` is a path or an instance of ``module.kind`` (imported only when ``value`` is an
+    object, so that checking a path loads neither torch nor Warp)."""
+    if not check.is_path(value):
+        import importlib
+
+        check.path_or(value, argument, (getattr(importlib.import_module(module), kind),), what)
 
 
 @dataclass
@@ -156,6 +187,10 @@ def simulate(garment, motion, settings: SimSettings | None = None, *, keep_frame
     >>> run = simulate("short-sleeve-top", "walk", frames=10)
     >>> run.garment.shape  # (10, vertices, 3), metres, Z up
     """
+    known = [f.name for f in fields(SimJob) if f.name not in ("garment", "motion", "settings")]
+    unknown = [name for name in options if name not in known]
+    if unknown:
+        raise DartsInputError(None, f"simulate: unknown option '{unknown[0]}' (options: {', '.join(known)})")
     job = SimJob(garment, motion, settings if settings is not None else SimSettings(), **options)
     return run_job(job, keep_frames=keep_frames, progress=progress)
 
@@ -258,10 +293,7 @@ def _shape(job: SimJob, dart, body) -> tuple[np.ndarray, np.ndarray]:
                               f"was made for {len(own)} shape coefficients, the body has {body.num_betas}")
     if job.betas is None:
         return own, own
-    target = np.asarray(job.betas, np.float64)
-    if len(target) > body.num_betas or not np.isfinite(target).all():
-        raise DartsInputError(None, f"betas must be at most {body.num_betas} finite numbers, got {len(target)}")
-    return own, target
+    return own, check.betas(job.betas, body.num_betas)
 
 
 def _check_device(device: str) -> None:
@@ -339,6 +371,9 @@ def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Si
     from sim.run import simulate as run_frames
     from sim.run import summary
 
+    if not isinstance(job, SimJob):
+        raise check.refuse("job", "a SimJob", job)
+    keep_frames, progress = check.switch(keep_frames, "keep_frames"), check.switch(progress, "progress")
     settings = job.check()
     dressing = _load_garments(job)
     motion = _load_motion(job)

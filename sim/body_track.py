@@ -18,7 +18,7 @@ from darts.errors import DartsInputError
 from darts.motion.amass import Motion
 from darts.motion.budget import check_frames
 from darts.motion.posing import motion_betas, pose_sequence
-from darts.motion.resample import resample
+from darts.motion.resampling import resample
 
 
 @dataclass

@@ -1,11 +1,21 @@
-"""Shared fixtures: the bundled body, and helpers to run the CLIs (darts, darts-sim) in-process."""
+"""Shared fixtures: the bundled body, helpers to run the CLIs (darts, darts-sim) in-process, and the
+hypothesis profiles of the fuzz tests: ``ci`` (derandomised, 25 examples a test; the default) and
+``long`` (``HYPOTHESIS_PROFILE=long``, 1,000)."""
 from __future__ import annotations
 
+import os
+
 import pytest
+from hypothesis import HealthCheck, settings
 
 from darts.body.io import load_body
 from darts.cli.main import main as darts_main
 from sim.cli import main as sim_main
+
+for _name, _examples in (("ci", 25), ("long", 1000)):
+    settings.register_profile(_name, max_examples=_examples, derandomize=_name == "ci", deadline=None,
+                              suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
 @pytest.fixture(scope="session")

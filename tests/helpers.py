@@ -27,7 +27,7 @@ def write_classic_amass_120fps(source_path, path) -> None:
     """A classic AMASS SMPL-H file at 120.00004577 fps (dmpls, bytes gender) made from a motion."""
     from darts.fileio import save_npz
     from darts.motion.amass import load_motion
-    from darts.motion.resample import resample
+    from darts.motion.resampling import resample
 
     fine = resample(load_motion(source_path), 120.00004577)
     save_npz(path, poses=np.concatenate([fine.body_pose, fine.hand_pose], 1).reshape(fine.num_frames, -1),

@@ -67,7 +67,7 @@ def test_jobs_travel_as_json_and_come_back_equal():
     (lambda: darts.reconstruct(np.zeros((224, 224, 3), np.uint8), silhouette="fuzzy"), "unknown silhouette term 'fuzzy'"),
     (lambda: sim.simulate("short-skirt", "walk", material="wool"), "unknown material 'wool'"),
     (lambda: sim.simulate("short-skirt", "walk", sim.SimSettings(solver="fem")), "unknown solver 'fem'"),
-    (lambda: sim.simulate("short-skirt", "walk", frames=0), "frames must be >= 1"),
+    (lambda: sim.simulate("short-skirt", "walk", frames=0), "frames must be a whole number >= 1, got int 0"),
     (lambda: sim.simulate("short-skirt", "walk", sim.SimSettings(tether_scale=0.5)), "tether scale must be in [0.9, 1]"),
     (lambda: sim.simulate("short-skirt", "walk", output="x.abc"), "output must end in"),
 ])

@@ -10,7 +10,7 @@ from darts.dart.io import load_dart
 from darts.geometry.distance import SurfaceDistance
 from darts.motion.amass import load_motion
 from darts.motion.posing import pose_sequence
-from darts.motion.resample import resample
+from darts.motion.resampling import resample
 from scenes import MOTIONS_DIR
 from sim.body_track import build_body_track
 

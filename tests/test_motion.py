@@ -11,7 +11,7 @@ from darts.errors import DartsInputError
 from darts.fileio import save_npz
 from darts.motion.amass import load_motion
 from darts.motion.posing import pose_sequence
-from darts.motion.resample import resample, slerp_rotvecs
+from darts.motion.resampling import resample, slerp_rotvecs
 from darts.shipped import shipped_motions
 from scenes import MOTIONS_DIR
 from tests.helpers import random_motion_arrays, write_classic_amass_120fps

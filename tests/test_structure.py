@@ -6,6 +6,7 @@ from __future__ import annotations
 import ast
 import subprocess
 import sys
+from importlib import import_module
 from pathlib import Path
 
 import pytest
@@ -134,3 +135,16 @@ def test_the_api_shows_itself(package):
     for name in public:
         assert getattr(module, name) is not None
     assert not {"lazy", "lazy_exports", "errors", "import_module"} & set(public)
+
+
+def test_no_lazily_exported_name_is_also_a_module_of_its_package():
+    """Importing a submodule sets the package's attribute of its name, which then shadows a lazily
+    exported function of the same name (``darts.motion.resample`` became a module once anything had
+    imported ``darts.motion.resample``)."""
+    modules = _modules()
+    for module, path in modules.items():
+        if path.name != "__init__.py":
+            continue
+        package = import_module(module)
+        exports = getattr(getattr(package, "__getattr__", None), "exports", {})
+        assert not [name for name in exports if f"{module}.{name}" in modules], module

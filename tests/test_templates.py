@@ -236,7 +236,7 @@ def test_corrupt_darts_give_one_clear_line(tmp_path, run_darts, edit, message):
     (["short-skirt", "--seam", "left_side=glued"], "unknown regime"),
     (["short-skirt", "--seam", "left_side=stiff:-5"], ">= 0"),
     (["short-skirt", "--seam", "left_side"], "NAME=REGIME"),
-    (["short-skirt", "--edge-length", "0"], "edge length"),
+    (["short-skirt", "--edge-length", "0"], "edge_length must be a number in [0.003, 0.1]"),
     (["short-skirt", "--accessory", "collar"], "needs a neckline"),
 ])
 def test_bad_template_requests_exit_2_without_output(tmp_path, run_darts, args, message):

@@ -17,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from darts import arguments as check
 from darts.body.joints import BodySizes
 from darts.body.segmentation import PART_NAMES
 from darts.errors import DartsInputError
-from darts.fileio import check_input_file, read_npz, require_indices, require_keys, require_real, save_npz
+from darts.fileio import check_input_file, check_output, read_npz, require_indices, require_keys, require_real, save_npz
 
 DEFAULT_BODY_PATH = Path(__file__).parent / "data" / "darts_default_body.npz"
 DEFAULT_BODY_NAME = "darts-default-v1"
@@ -57,10 +58,7 @@ class BodyArrays(BodySizes):
     def shaped(self, betas=None) -> tuple[np.ndarray, np.ndarray]:
         """Rest shape T + S beta [V,3] and its joints J_regressor (T + S beta) [J,3] (canonical frame)."""
         vertices = self.v_template
-        if betas is not None and len(betas):
-            betas = np.asarray(betas, np.float64)
-            if len(betas) > self.num_betas:
-                raise ValueError(f"{len(betas)} betas given, the model has {self.num_betas}")
+        if betas is not None and len(betas := check.betas(betas, self.num_betas)):
             vertices = vertices + self.shapedirs[:, :, : len(betas)] @ betas
         return vertices, self.J_regressor @ vertices
 
@@ -187,6 +185,10 @@ def _parents_from_kintree(kintree: np.ndarray, num_joints: int, source) -> np.nd
     return parents
 
 
+#: metres: how tall (along Y, at rest) a body can be: an infant's SMIL body to a giant's.
+HEIGHT_RANGE = (0.3, 3.0)
+
+
 def body_arrays(arrays: dict, source, name: str | None = None) -> BodyArrays:
     """Validate SMPL-layout arrays (a file's keys: v_template, f, shapedirs, ...); every problem names ``source``."""
     require_keys(arrays, REQUIRED_KEYS, source)
@@ -196,6 +198,10 @@ def body_arrays(arrays: dict, source, name: str | None = None) -> BodyArrays:
     v_template = np.asarray(arrays["v_template"], np.float64)
     if v_template.ndim != 2 or v_template.shape[1] != 3 or len(v_template) < 4:
         raise DartsInputError(source, f"'v_template' has shape {v_template.shape}, expected [V, 3]")
+    height = np.ptp(v_template[:, 1])  # the rest pose stands along Y (canonical frame)
+    if not HEIGHT_RANGE[0] <= height <= HEIGHT_RANGE[1]:
+        raise DartsInputError(source, f"the rest body is {height:.4g} m tall (Y); a body in metres stands "
+                                      f"{HEIGHT_RANGE[0]:g} to {HEIGHT_RANGE[1]:g} m (is it in centimetres or millimetres?)")
     nv = len(v_template)
     faces = require_indices("f", arrays["f"], source)
     if faces.ndim != 2 or faces.shape[1] != 3 or faces.min(initial=0) < 0 or faces.max(initial=0) >= nv:
@@ -252,7 +258,7 @@ def body_from_arrays(arrays: dict, source, name: str | None = None, dtype=None):
 def read_body(path: str | os.PathLike | None = None) -> BodyArrays:
     """The validated arrays of the body in ``path`` (official SMPL/SMPL-H/SMPL-X .pkl or .npz), or
     of the bundled default; no torch."""
-    source = Path(path) if path is not None else DEFAULT_BODY_PATH
+    source = Path(check.path_or(path, "path", what="None or a path")) if path is not None else DEFAULT_BODY_PATH
     return body_arrays(_read_arrays(source), source)
 
 
@@ -278,6 +284,9 @@ def _part_labels(labels, num_vertices: int, source) -> np.ndarray:
 def export_smpl_npz(body: BodyArrays, path: str | os.PathLike, betas=None) -> None:
     """Write ``body`` in the official SMPL ``.npz`` layout. With ``betas`` the shape is baked into
     ``v_template`` (shapedirs are kept, so further betas are relative to that shape)."""
+    if not isinstance(body, BodyArrays):
+        raise check.refuse("body", "a BodyArrays (darts.body.read_body)", body)
+    path = check_output(check.path_or(path, "path"), (".npz",))
     v_shaped, _ = body.shaped(betas)
     num_joints = body.num_joints
     posedirs = body.posedirs

@@ -3,4 +3,4 @@ on first use (posing needs torch, loading does not)."""
 from darts.lazy import lazy_exports as _lazy_exports
 
 __getattr__, __dir__, __all__ = _lazy_exports(__name__, {
-    "Motion": "amass", "load_motion": "amass", "save_motion": "amass", "pose_sequence": "posing", "resample": "resample"})
+    "Motion": "amass", "load_motion": "amass", "save_motion": "amass", "pose_sequence": "posing", "resample": "resampling"})

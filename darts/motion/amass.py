@@ -13,8 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
+from darts import arguments as check
 from darts.errors import DartsInputError
-from darts.fileio import read_npz, require_keys, require_real, save_npz
+from darts.fileio import check_output, read_npz, require_keys, require_real, save_npz
 
 NUM_BODY_JOINTS = 22  # the root plus 21 body joints, common to SMPL, SMPL-H and SMPL-X
 NUM_HAND_JOINTS = 30  # 15 per hand, left then right (MANO order)
@@ -116,7 +117,7 @@ def _gender(arrays: dict) -> str:
 
 def load_motion(path: str | os.PathLike) -> Motion:
     """Load and validate an AMASS-format ``.npz``; any problem raises DartsInputError naming the file."""
-    path = Path(path)
+    path = Path(check.path_or(path, "path"))
     arrays = read_npz(path)
     require_keys(arrays, ["trans"], path, "an AMASS motion file")
     trans = _frames(arrays, "trans", 3, None, path)
@@ -156,6 +157,9 @@ def load_motion(path: str | os.PathLike) -> Motion:
 def save_motion(motion: Motion, path: str | os.PathLike) -> None:
     """Write ``motion`` in the classic SMPL-H AMASS layout (poses [T,156], trans, betas [16],
     gender, mocap_framerate, dmpls [T,8])."""
+    if not isinstance(motion, Motion):
+        raise check.refuse("motion", "a Motion", motion)
+    path = check_output(check.path_or(path, "path"), (".npz",))
     t = motion.num_frames
     hands = motion.hand_pose if motion.hand_pose is not None else np.zeros((t, NUM_HAND_JOINTS, 3))
     betas = np.zeros(16) if motion.betas is None else np.resize(motion.betas, 16)

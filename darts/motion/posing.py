@@ -5,6 +5,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
+from darts import arguments as check
 from darts.body.model import BodyModel
 from darts.motion.amass import Motion
 from darts.motion.budget import check_posed_bytes
@@ -14,7 +15,7 @@ def motion_betas(model: BodyModel, motion: Motion, betas=None) -> np.ndarray:
     """Betas to pose ``model`` with: explicit ones, else the motion's for official models (truncated
     to the model's count), else zeros; the default body's shape space is not SMPL's."""
     if betas is not None:
-        return np.asarray(betas, np.float64)
+        return check.betas(betas, model.num_betas, motion.num_frames)
     if motion.betas is not None and not model.name.startswith("darts-default"):
         return motion.betas[: model.num_betas]
     return np.zeros(0)
@@ -26,6 +27,12 @@ def pose_sequence(model: BodyModel, motion: Motion, betas=None, ground: bool = F
 
     ``betas`` is one shape [K] or one per frame [T,K] (a body changing shape). With ``ground`` the
     whole sequence is shifted along Z so its lowest vertex touches z = 0."""
+    if not isinstance(model, BodyModel):
+        raise check.refuse("model", "a BodyModel (darts.load_body)", model)
+    if not isinstance(motion, Motion):
+        raise check.refuse("motion", "a Motion (darts.load_motion)", motion)
+    ground, progress = check.switch(ground, "ground"), check.switch(progress, "progress")
+    chunk = check.number(chunk, "chunk", 1, whole=True)
     check_posed_bytes(motion.num_frames, model.num_vertices + model.num_joints, motion.path)
     pose = motion.model_pose(model.num_joints)
     shape = torch.as_tensor(motion_betas(model, motion, betas), dtype=model.dtype)

@@ -21,7 +21,7 @@ from darts.geometry.mesh import boundary_loops, directed_edges, vertex_normals
 from darts.geometry.remesh import remesh
 from darts.geometry.slivers import remove_slivers
 from darts.templates.categories import CATEGORIES, SIDES, Category, seam_fields
-from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH
+from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH, EDGE_LENGTH_RANGE
 from darts.templates.landmarks import Landmarks, above_field, arm_field, below_field, landmarks, neckline_field
 
 #: edges shorter than this fraction of the median edge are collapsed (seam insertion leaves them)
@@ -216,13 +216,27 @@ def build_template(category_id: str, body: BodyModel, betas=None, edge_length: f
     """The template of ``category_id`` for ``body`` with shape ``betas`` (canonical frame, metres)."""
     if category_id not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{category_id}' (known: {', '.join(CATEGORIES)})")
-    if not (0.003 <= edge_length <= 0.1):
-        raise DartsInputError(None, f"edge length must be between 0.003 and 0.1 m, got {edge_length}")
+    if not (EDGE_LENGTH_RANGE[0] <= edge_length <= EDGE_LENGTH_RANGE[1]):
+        raise DartsInputError(None, f"edge length must be between {EDGE_LENGTH_RANGE[0]:g} and {EDGE_LENGTH_RANGE[1]:g} m, "
+                                    f"got {edge_length}")
     if not (0.0 <= ease <= 0.05):
         raise DartsInputError(None, f"ease must be between 0 and 0.05 m, got {ease}")
     category = CATEGORIES[category_id]
     shaped, joints = body.shaped(betas)
     body_vertices, joints = shaped[0].double().detach().numpy(), joints[0].double().detach().numpy()
+    try:
+        return _cut_from_body(category, body, body_vertices, joints, edge_length, ease)
+    except DartsInputError:
+        raise
+    except (RuntimeError, ValueError) as exc:  # the cut's own checks, on a body no human surface
+        raise DartsInputError(None, f"no {category_id} could be cut from the body '{body.name}' ({exc}): its surface "
+                                    "is not a smooth human one (tangled, noisy or out of proportion)") from None
+
+
+def _cut_from_body(category, body: BodyModel, body_vertices: np.ndarray, joints: np.ndarray, edge_length: float,
+         ease: float) -> Template:
+    """``build_template``'s template of ``category`` cut from the shaped body (``body_vertices``,
+    ``joints``; canonical frame, metres)."""
     lm = landmarks(body_vertices, joints, body.joint_names)
     vertices, faces, hull = _base_surface(category, body_vertices, body.faces, lm, edge_length)
     vertices, faces, seams = _insert_seams(vertices, faces, category, lm)
@@ -230,4 +244,4 @@ def build_template(category_id: str, body: BodyModel, betas=None, edge_length: f
     edges = np.unique(np.sort(directed_edges(faces), axis=1), axis=0)
     median = float(np.median(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)))
     vertices, faces, seams, _ = remove_slivers(vertices, faces, seams, MIN_EDGE_FRACTION * median)
-    return Template(category_id, vertices, faces, _name_lines(category, vertices, faces), seams, hull, lm)
+    return Template(category.id, vertices, faces, _name_lines(category, vertices, faces), seams, hull, lm)

@@ -5,4 +5,6 @@ DEFAULT_EDGE_LENGTH = 0.011  # metres: a short-sleeve top gets about 6k vertices
 #: metres: the templates of the reconstruction dataset and of ``darts reconstruct`` (2-4k vertices;
 #: a 224 px picture resolves about 7 mm)
 DATASET_EDGE_LENGTH = 0.02
+#: metres: the edge lengths a template can be cut at (finer runs out of memory, coarser loses the body's shape)
+EDGE_LENGTH_RANGE = (0.003, 0.1)
 DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal

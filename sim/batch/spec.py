@@ -220,8 +220,8 @@ def _job(garment: str, motion: str, body: Body, material: str | None, seams: Sea
 
     from sim.cli import command_line
 
-    job = sim_job(garment, motion, body, material, seams, sim)
     try:  # the settings and values only: the outputs are the job folder's, checked when it runs
+        job = sim_job(garment, motion, body, material, seams, sim)
         replace(job, output=None, stats=None, preview=None).check()
     except DartsInputError as exc:
         checker.fail(where, exc.problem)

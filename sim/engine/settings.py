@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 
-import numpy as np
+from darts import arguments
+from darts.errors import DartsInputError
 
 DEFAULT_SOLVER = "xpbd"
 #: A particle's path relative to the body longer than this (m) since its last search is traced for
@@ -80,15 +81,20 @@ class SimSettings:
     replay_launches: bool = True
     seed: int = _user(0, "seed of the wind gusts (runs are deterministic)")
 
+    def __post_init__(self):
+        """Each value checked to be of its field's kind (a number, a whole number, a str, a bool, three
+        numbers) and within range (``check``): a DartsInputError naming the setting, when made."""
+        for f in fields(self):
+            value = getattr(self, f.name)
+            kind = str(f.type)
+            if kind == "int | None" and value is None:
+                continue
+            setattr(self, f.name, _CHECKS[kind](value, f.name))
+        self.check()
+
     def check(self) -> None:
-        """Raise ValueError naming the first setting out of range (the solver's name is the
+        """Raise DartsInputError naming the first setting out of range (the solver's name is the
         registry's to check: ``sim.engine.solvers.solver_class``)."""
-        finite = all(np.isfinite(v) for v in (self.fps, self.gust, self.air_density, self.drag_coefficient,
-                                               self.damping, self.contact_reach, self.self_contact_reach,
-                                               self.self_contact_list_reach, self.contact_skin, self.tether_scale,
-                                               self.max_body_speed, self.max_speed, *self.gravity, *self.wind))
-        if not finite:
-            raise ValueError("settings must be finite numbers")
         rules = [
             (self.fps > 0, f"fps must be > 0, got {self.fps}"),
             (self.substeps is None or self.substeps >= 1, f"substeps must be >= 1, got {self.substeps}"),
@@ -110,7 +116,15 @@ class SimSettings:
         ]
         for ok, message in rules:
             if not ok:
-                raise ValueError(message)
+                raise DartsInputError(None, message)
+
+
+#: How a value of each field type is checked (``darts.arguments``): numbers are finite, whole numbers ints.
+_CHECKS = {
+    "float": arguments.number, "int": lambda v, name: arguments.number(v, name, whole=True),
+    "int | None": lambda v, name: arguments.number(v, name, whole=True), "str": arguments.text,
+    "bool": arguments.switch, "tuple[float, float, float]": arguments.vector,
+}
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,8 @@ import pkgutil
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from darts.errors import DartsInputError
+
 
 @dataclass(frozen=True)
 class SolverEntry:
@@ -80,11 +82,11 @@ def solver_class(name: str) -> type:
 
 
 def resolved_settings(settings):
-    """``settings`` checked (``SimSettings.check``; ValueError naming the first bad one, an unknown
+    """``settings`` checked (``SimSettings.check``; DartsInputError naming the first bad one, an unknown
     solver included), with ``substeps`` set to the solver's own default where it is None."""
     settings.check()
     if settings.solver not in solver_names():
-        raise ValueError(f"unknown solver '{settings.solver}' (one of {', '.join(solver_names())})")
+        raise DartsInputError(None, f"unknown solver '{settings.solver}' (one of {', '.join(solver_names())})")
     if settings.substeps is None:
         settings = replace(settings, substeps=default_substeps(settings.solver))
     return settings

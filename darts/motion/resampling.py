@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from darts.motion.amass import Motion
+from darts import arguments as check
+from darts.motion.amass import FPS_RANGE, Motion
 from darts.motion.budget import check_frames
 
 
@@ -17,8 +18,9 @@ def slerp_rotvecs(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 def resample(motion: Motion, fps: float) -> Motion:
     """The motion sampled at ``fps`` over the same duration (first frame kept, last one not passed)."""
-    if not np.isfinite(fps) or fps <= 0:
-        raise ValueError(f"fps must be positive, got {fps}")
+    if not isinstance(motion, Motion):
+        raise check.refuse("motion", "a Motion", motion)
+    fps = check.number(fps, "fps", *FPS_RANGE)
     # Rates like AMASS's 120.00004577 are nominal: a frame within 0.1 % of the end still counts.
     count = np.floor(motion.duration * fps + 1e-3) + 1
     check_frames(count, motion.path, f"the motion resampled to {fps:g} fps")
