@@ -122,6 +122,65 @@ def simulation_figure(out: Path, scenes: list[tuple[str, str]], times: list[floa
     plt.close(fig)
 
 
+#: The seam settings of the seams figure (the paper's Fig. 1), left to right.
+SEAM_SETTINGS = ("welded", "stiff", "loose:20", "loose:5", "loose:2", "repulsive", "partial")
+
+
+def seams_figure(out: Path, garment: str, moments: list[tuple[str, float]]) -> None:
+    """The paper's Fig. 1 from darts-sim runs: ``garment`` with every seam in each of
+    ``SEAM_SETTINGS`` (the default settings otherwise), one row per (motion, seconds after the
+    settle), close on the left side under the arm (shoulder, armhole, underarm and side seams), each
+    seam pair more than 1 mm open whose ends both face the viewer drawn as a red segment; each panel titled
+    with the run's widest seam gap up to that moment (mm; a partial seam's sprung part)."""
+    from darts.dart.export import panel_colors
+    from darts.dart.io import load_dart
+    from darts.geometry.mesh import vertex_normals
+    from darts.render import WORLD_FRONT_LEFT
+    from scenes import GARMENTS_DIR
+    from sim.body_track import build_body_track
+    from sim.engine.settings import SimSettings
+    from sim.run import simulate
+
+    body = load_body()
+    right, up = WORLD_FRONT_LEFT
+    view = np.cross(right, up)
+    fig, axes = plt.subplots(len(moments), len(SEAM_SETTINGS), figsize=(2.0 * len(SEAM_SETTINGS), 2.3 * len(moments)))
+    for row, (motion_name, seconds) in enumerate(moments):
+        frame = int(round(seconds * 30.0))
+        track = build_body_track(body, load_motion(MOTIONS_DIR / f"{motion_name}.npz"), 30.0, 0.5)
+        keep = track.settle_frames + frame + 1
+        track.vertices, track.pelvis = track.vertices[:keep], track.pelvis[:keep]
+        for col, setting in enumerate(SEAM_SETTINGS):
+            dart = load_dart(GARMENTS_DIR / f"{garment}.npz")
+            regime, _, stiffness = setting.partition(":")
+            dart.set_seam("all", regime, float(stiffness) if stiffness else None)
+            last: dict = {}
+            result = simulate(dart, track, SimSettings(), lambda g, b, last=last: last.update(garment=g, body=b))
+            key = "sprung_max" if regime == "partial" else "max"
+            widest = max(g[key] for f in result.frames for g in f["seam_gap"].values())
+            cloth = np.asarray(last["garment"], np.float64)
+            left = np.isin(dart.pair_seam, [k for k, s in enumerate(dart.seams) if s.name.startswith("left_")])
+            centre = cloth[dart.pairs[left]].reshape(-1, 3).mean(0)
+            faces = np.concatenate([body.faces, dart.faces + body.num_vertices])
+            colors = np.concatenate([np.full((len(body.faces), 3), 0.8), panel_colors(len(dart.panel_names))[dart.panel]])
+            ax = axes[row, col]
+            # The body drawn 5 mm inside itself: flat-shaded triangles sorted by depth would otherwise show
+            # it through cloth that lies a thickness off it.
+            shrunk = last["body"] - 0.005 * vertex_normals(np.asarray(last["body"], np.float64), body.faces)
+            draw_mesh(ax, np.concatenate([shrunk, cloth]) - centre, faces, colors, right, up)
+            facing = vertex_normals(cloth, dart.faces) @ view > 0
+            shown = dart.pairs[facing[dart.pairs].all(1)]
+            shown = shown[np.linalg.norm(cloth[shown[:, 0]] - cloth[shown[:, 1]], axis=1) > 0.001]
+            for a, b in cloth[shown] - centre:
+                ax.plot([a @ right, b @ right], [a @ up, b @ up], color="red", lw=1.2)
+            ax.set_xlim(-0.2, 0.2)
+            ax.set_ylim(-0.17, 0.2)
+            ax.set_title(f"{setting}: {1e3 * widest:.1f} mm\n{motion_name} {seconds:g} s", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=80)
+    plt.close(fig)
+
+
 def dataset_figure(out: Path, root: Path) -> None:
     """Per category (rows): two test pictures with their lines drawn at their projected pixels,
     the first one's garment mask, and the same garment in the unseen-appearance part."""
@@ -161,6 +220,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output-dir", default="docs/images")
     parser.add_argument("--simulation", action="store_true", help="only the simulation figure (runs the solver)")
+    parser.add_argument("--deep-poses", action="store_true", help="only the sit and squat figure (runs the solver)")
+    parser.add_argument("--seams", action="store_true", help="only the seam regimes figure, the paper's Fig. 1 (runs the solver)")
     parser.add_argument("--dataset", type=Path, metavar="ROOT", help="only the dataset's contact sheet")
     args = parser.parse_args()
     out = Path(args.output_dir)
@@ -168,6 +229,15 @@ def main() -> None:
     if args.dataset:
         dataset_figure(out / "dataset.png", args.dataset)
         print(f"wrote {out}/dataset.png")
+        return
+    if args.seams:
+        seams_figure(out / "seam_regimes.png", "short-sleeve-top", [("walk", 1.0), ("squat", 1.6)])
+        print(f"wrote {out}/seam_regimes.png")
+        return
+    if args.deep_poses:
+        simulation_figure(out / "deep_poses.png", [("long-pants", "sit"), ("short-skirt", "sit"), ("long-pants", "squat"),
+                                                   ("short-skirt", "squat")], [0.0, 0.9, 1.7, 3.0])
+        print(f"wrote {out}/deep_poses.png")
         return
     if args.simulation:
         simulation_figure(out / "simulation.png", [("short-sleeve-top", "walk"), ("tshirt-collar-tie", "wave"),

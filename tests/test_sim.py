@@ -149,6 +149,24 @@ def test_loose_gap_grows_as_stiffness_falls(walk_track, welded_stiff_loose):
     assert all(a < b for a, b in zip(values, values[1:])), mean_gap
 
 
+@pytest.mark.slow
+def test_the_tops_stiff_seams_hold_where_it_touches_the_body_and_loose_ones_open_as_they_soften(walk_track):
+    """Issue 46: the top's shoulders and armholes lie on the body, whose friction held each end of
+    a seam pair by its own push and opened stiff seams by 3.5 mm; the seams projected once more after
+    friction keep them within 2 mm, and loose seams open further at each lower stiffness."""
+    widest = {}
+    for setting in ("stiff", "loose:20", "loose:5", "loose:2"):
+        dart = load_dart(GARMENTS_DIR / "short-sleeve-top.npz")
+        regime, _, stiffness = setting.partition(":")
+        dart.set_seam("all", regime, float(stiffness) if stiffness else None)
+        result = simulate(dart, walk_track, SimSettings())
+        assert result.stable, result.message
+        widest[setting] = max(max(g["max"] for g in frame["seam_gap"].values()) for frame in result.frames)
+    values = list(widest.values())
+    assert widest["stiff"] <= 2 * MM and all(a < b for a, b in zip(values, values[1:])), widest
+    assert widest["loose:2"] >= 4 * widest["stiff"] and widest["loose:2"] >= 5 * MM, widest
+
+
 def test_repulsive_opens_towards_its_rest_length_and_partial_opens_only_unsprung(body):
     track = build_body_track(body, _walk(20), 30.0, 0.0)  # no settle: watch the gap open from 0
     result = _skirt_run(track, left_side="repulsive", right_side="partial")

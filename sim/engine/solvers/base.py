@@ -124,10 +124,14 @@ class Solver:
         collider.resolve(state.x)
 
     def finish(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float) -> None:
-        """Friction for the substep's contact pushes (the garment's own layers, then the body), then
-        v = (x_out - x_in) / dt."""
+        """Friction for the substep's contact pushes (the garment's own layers, then the body), the
+        solver's ``after_friction``, then v = (x_out - x_in) / dt."""
         if self.settings.self_contact:
             self.self_contact.friction(state_in.x)
         collider.friction(state_out.x, state_in.x, dt)
+        self.after_friction(state_out, dt)
         self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
         self.launch(kernels.track_fastest, self.count, [state_out.v, self.fastest])
+
+    def after_friction(self, state: ClothState, dt: float) -> None:
+        """What a solver projects once more after friction moved the contacts (nothing here)."""
