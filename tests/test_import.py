@@ -8,10 +8,12 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
+from darts.body.segmentation import PART_NAMES
 from darts.dart.io import load_dart
 from darts.errors import DartsInputError
 from darts.meshimport.align import umeyama
 from darts.meshimport.read import read_garment_mesh, triangulate
+from darts.meshimport.register import distance_summary
 from darts.meshimport.repair import repair_garment_mesh
 from scenes import GARMENTS_DIR
 from tests.helpers import cone_skirt_obj, remeshed_shirt, write_usd_mesh
@@ -26,6 +28,21 @@ def _fits(report):
         assert report[way]["mean_mm"] <= 5 and report[way]["p95_mm"] <= 15, report[way]
     assert max(line["max_mm"] for line in report["feature_lines"].values()) <= 10, report["feature_lines"]
     assert report["inside_body"] <= 0.01
+    for way, key in (("dart_to_mesh", "worst"), ("mesh_to_dart", "worst"), ("mesh_to_dart", "worst_body_parts")):
+        shares = [place["share"] for place in report[way][key]]
+        assert 0 < sum(shares) <= 1 + 1e-9 and shares == sorted(shares, reverse=True), report[way]
+    assert {p["body_part"] for p in report["mesh_to_dart"]["worst_body_parts"]} <= set(PART_NAMES)
+
+
+def test_the_report_says_which_panels_hold_the_farthest_points():
+    """The farthest 5 % (at or beyond the 95th percentile) counted by panel, most first, with each
+    panel's largest distance in mm."""
+    values = np.r_[np.linspace(0.0, 0.001, 90), np.full(7, 0.04), np.full(3, 0.05)]
+    panels = np.r_[np.zeros(90, int), np.full(7, 2), np.full(3, 1)]
+    summary = distance_summary(values, panels, ["front", "back", "left_sleeve"])
+    assert summary["worst"] == [{"panel": "left_sleeve", "share": 0.7, "max_mm": pytest.approx(40.0)},
+                                {"panel": "back", "share": 0.3, "max_mm": pytest.approx(50.0)}]
+    assert summary["p95_mm"] == pytest.approx(40.0) and summary["max_mm"] == pytest.approx(50.0)
 
 
 @pytest.fixture(scope="module")

@@ -85,6 +85,10 @@ def import_mesh(args) -> int:
           f"mean {report['dart_to_mesh']['mean_mm']:.2f} mm (DART to mesh) / {report['mesh_to_dart']['mean_mm']:.2f} mm "
           f"(mesh to DART), feature lines within {max(v['max_mm'] for v in report['feature_lines'].values()):.1f} mm, "
           f"{100 * report['inside_body']:.2f} % of vertices inside the body")
+    far = report["mesh_to_dart"]
+    places = ", ".join(f"{100 * p['share']:.0f} % over the {p['body_part'].replace('_', ' ')}" for p in far["worst_body_parts"])
+    print(f"the mesh's farthest 5 % from the DART ({far['p95_mm']:.1f} mm and beyond, up to {far['max_mm']:.1f} mm): "
+          f"{places}; nearest DART panel {far['worst'][0]['panel']}")
     return 0
 
 

@@ -16,6 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from darts.body.model import BodyModel
+from darts.body.segmentation import PART_NAMES, body_segmentation
 from darts.crdl.deform import fit_surface, handle_targets, weld_garment
 from darts.crdl.layer import Crdl, CrdlWeights
 from darts.dart.model import Dart
@@ -38,6 +39,24 @@ def _polyline_distance(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
     return np.linalg.norm(points[:, None] - nearest, axis=-1).min(1)
 
 
+#: How many panels a direction's ``worst`` lists.
+WORST_PANELS = 3
+
+
+def distance_summary(values: np.ndarray, panels: np.ndarray, names: list[str], kind: str = "panel") -> dict:
+    """Mean, 95th percentile and largest of the distances ``values`` [N] (m, reported in mm), and
+    ``worst``: where the farthest points (those at or beyond the 95th percentile) are — the places
+    (``panels`` [N], indices into ``names``: DART panels, or a ``kind`` of place) holding most of
+    them, each with its share of them and its largest distance (mm), most first, at most ``WORST_PANELS``."""
+    values = np.abs(values)
+    far = values >= np.percentile(values, 95)
+    found, counts = np.unique(panels[far], return_counts=True)
+    worst = [{kind: names[k], "share": float(c / far.sum()), "max_mm": 1e3 * float(values[far & (panels == k)].max())}
+             for k, c in sorted(zip(found, counts), key=lambda item: -item[1])[:WORST_PANELS]]
+    return {"mean_mm": 1e3 * float(values.mean()), "p95_mm": 1e3 * float(np.percentile(values, 95)),
+            "max_mm": 1e3 * float(values.max()), "worst": worst}
+
+
 def _distances(values: np.ndarray) -> dict:
     values = np.abs(values)
     return {"mean_mm": 1e3 * float(values.mean()), "p95_mm": 1e3 * float(np.percentile(values, 95)),
@@ -48,7 +67,9 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
                       lines: dict[str, np.ndarray]) -> tuple[Dart, dict]:
     """The template deformed onto the mesh (``vertices`` [N,3] placed on the body, canonical frame;
     ``lines``: its loops by the template's line names), and the report: surface distances both ways
-    (``dart_to_mesh``, ``mesh_to_dart``: point to surface, mm), each line's residual (distance of the
+    (``dart_to_mesh``, ``mesh_to_dart``: point to surface, mm, with the panels where the farthest
+    5 % lie, ``distance_summary``; a mesh point's panel is that of its closest DART face, and
+    ``worst_body_parts`` the body parts its farthest points lie over), each line's residual (distance of the
     DART's line vertices to the mesh's loop, mm) and the fraction of vertices inside the body."""
     garment = weld_garment(template)
     surface = fit_surface(template, body)
@@ -68,9 +89,19 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
         raise RuntimeError("the registration produced non-finite vertices")
     dart = replace(template, vertices=points[garment.index].astype(np.float32))
     to_mesh, _, _ = mesh.query(points, winding=False)
-    to_dart, _, _ = SurfaceDistance(points, garment.faces).query(vertices, winding=False)
+    registered = SurfaceDistance(points, garment.faces)
+    to_dart, _, _ = registered.query(vertices, winding=False)
+    vertex_panel = np.zeros(count, np.int64)
+    vertex_panel[garment.faces.reshape(-1)] = np.repeat(template.panel, 3)  # welded faces keep the DART's order
+    nearest_face, _ = registered.closest_faces(vertices)
     residuals = {name: _distances(_polyline_distance(points[garment.lines[name]], vertices[loop]))
                  for name, loop in lines.items()}
-    report = {"dart_to_mesh": _distances(to_mesh), "mesh_to_dart": _distances(to_dart),
+    names = list(template.panel_names)
+    body_face, _ = surface.body.closest_faces(vertices)
+    body_part = body_segmentation(body)[body.faces[np.maximum(body_face, 0), 0]]
+    by_part = distance_summary(to_dart, body_part, list(PART_NAMES), "body_part")["worst"]
+    report = {"dart_to_mesh": distance_summary(to_mesh, vertex_panel, names),
+              "mesh_to_dart": {**distance_summary(to_dart, template.panel[np.maximum(nearest_face, 0)], names),
+                               "worst_body_parts": by_part},
               "feature_lines": residuals, "inside_body": surface.inside_fraction(points)}
     return dart, report
