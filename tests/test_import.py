@@ -94,6 +94,32 @@ def test_a_remeshed_stretched_turned_shirt_in_centimetres_is_registered(form, sh
 
 
 @pytest.mark.slow
+def test_a_shirt_made_with_the_arms_hanging_is_registered_on_a_template_with_lowered_arms(tmp_path, run_darts):
+    """Garment tools export tops in an A-pose: the shipped T-shirt posed by the body's skinning with
+    its arms 40 degrees down (welded, metres, Y up) is recognised as a short-sleeve top only once
+    the templates' arms are lowered too, fits both ways, and comes back to the rest pose near the
+    shirt it was made from."""
+    from darts.body.io import load_body
+    from darts.dart.model import welded
+    from darts.meshimport.pose import lower_arms
+
+    shipped = load_dart(GARMENTS_DIR / "short-sleeve-top.npz")
+    hanging = lower_arms(shipped, load_body(), 40.0).template
+    vertices, faces, _ = welded(hanging)
+    trimesh.Trimesh(vertices, faces, process=False).export(tmp_path / "a-pose.obj")
+    code, out, err = run_darts("import", tmp_path / "a-pose.obj", "-o", tmp_path / "g.npz", "--report", tmp_path / "r.json",
+                               "--quiet")
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["category"] == "short-sleeve-top" and report["arms_lowered_degrees"] in (30.0, 45.0), report
+    for way in ("dart_to_mesh", "mesh_to_dart"):
+        assert report[way]["mean_mm"] <= 3 and report[way]["p95_mm"] <= 8, report[way]
+    dart = load_dart(tmp_path / "g.npz")
+    offset = np.linalg.norm(dart.vertices - shipped.vertices, axis=1)
+    assert np.mean(offset) < 0.01, np.mean(offset)
+
+
+@pytest.mark.slow
 def test_an_exported_dart_comes_back_where_it_was(tmp_path, run_darts):
     source = GARMENTS_DIR / "short-skirt.npz"
     assert run_darts("export", source, "-o", tmp_path / "s.obj")[0] == 0

@@ -2,13 +2,15 @@
 register the category template onto it (``darts import``).
 
 Frames: the file's points as stored -> (``SourceMesh.to_canonical``: units, up axis, a USD prim's
-transform) canonical frame, Y up, metres -> (the alignment, or ``--transform``) on the body. The
-report's ``transform`` is the product: the file's points straight to the DART's frame.
+transform) canonical frame, Y up, metres -> (the alignment, or ``--transform``) on the body, posed
+with the arms lowered by the angle that fits best (``darts.meshimport.pose``; 0 for a garment at
+rest). The report's ``transform`` is the product: the file's points straight to the DART's frame in
+that pose; the DART itself is taken back to the rest pose.
 """
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -87,8 +89,10 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
     """The DART of the mesh file ``path`` and its report; see the module docstring.
     ``progress(text)`` is told each step."""
     from darts.body.io import load_body
-    from darts.crdl.deform import fit_surface, weld_garment
+    from darts.crdl.deform import weld_garment
+    from darts.crdl.fit import FitSurface
     from darts.meshimport.align import SCALE_RANGE, align_to_template, apply_matrix, naming_only
+    from darts.meshimport.pose import arm_angles, lower_arms
     from darts.meshimport.register import register_template
 
     options = options or ImportOptions()
@@ -101,31 +105,39 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
     candidates = _candidates(path, loops, options.category)
     body = load_body(options.body)
 
-    tried = {}
+    tried = {}  # category -> (alignment, the template lowered, its fit surface), at its best arm angle
     for category in candidates:
         say(f"placing on the {category} template")
         template = _template(category, body, options)
-        welded = weld_garment(template)
-        if options.transform is not None:
-            placed = options.transform @ np.linalg.inv(source.to_canonical)
-            alignment = naming_only(vertices, faces, loops, CATEGORIES[category], placed, welded)
-        else:
-            alignment = align_to_template(vertices, faces, loops, CATEGORIES[category], welded.vertices,
-                                          welded.faces, welded.lines, fit_surface(template, body))
-        tried[category] = (alignment, template)
+        hull = None if template.hull_vertices is None else (template.hull_vertices, template.hull_faces)
+        angles = arm_angles(CATEGORIES[category].family) if options.transform is None else (0.0,)
+        for degrees in angles:
+            lowered = lower_arms(template, body, degrees)
+            welded = weld_garment(lowered.template)
+            surface = FitSurface(lowered.body_vertices, body.faces, hull)
+            if options.transform is not None:
+                placed = options.transform @ np.linalg.inv(source.to_canonical)
+                alignment = naming_only(vertices, faces, loops, CATEGORIES[category], placed, welded)
+            else:
+                alignment = align_to_template(vertices, faces, loops, CATEGORIES[category], welded.vertices,
+                                              welded.faces, welded.lines, surface)
+            if category not in tried or alignment.distance < tried[category][0].distance:
+                tried[category] = (alignment, lowered, surface)
     category = min(tried, key=lambda c: tried[c][0].distance)
-    alignment, template = tried[category]
+    alignment, lowered, surface = tried[category]
     if options.transform is None and not SCALE_RANGE[0] < alignment.scale < SCALE_RANGE[1]:
         raise DartsInputError(path, f"would need scaling by {alignment.scale:g} or beyond to fit the body "
                                     f"(at most {SCALE_RANGE[0]}-{SCALE_RANGE[1]}): check --units")
     placed = apply_matrix(alignment.matrix, vertices)
     say(f"registering the {category} template onto the mesh")
-    dart, fit = register_template(template, body, placed, faces, alignment.lines)
+    dart, fit = register_template(lowered.template, body, placed, faces, alignment.lines, surface)
+    dart = replace(dart, vertices=lowered.rest(dart.vertices).astype(np.float32))
     transform = alignment.matrix @ source.to_canonical
     report = {"source": os.fspath(path), "category": category,
-              "category_guess": None if options.category else {c: 1e3 * a.distance for c, (a, _) in tried.items()},
+              "category_guess": None if options.category else {c: 1e3 * t[0].distance for c, t in tried.items()},
               "transform": transform.tolist(), "scale": alignment.scale,
               "placement": "--transform" if options.transform is not None else "aligned to the template's openings",
-              "placement_distance_mm": 1e3 * alignment.distance, "notes": notes,
+              "placement_distance_mm": 1e3 * alignment.distance, "arms_lowered_degrees": lowered.degrees,
+              "notes": notes,
               "mesh": {"vertices": len(vertices), "faces": len(faces), "openings": len(loops)}, **fit}
     return ImportResult(dart, report, placed, faces)

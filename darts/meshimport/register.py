@@ -18,6 +18,7 @@ import numpy as np
 from darts.body.model import BodyModel
 from darts.body.segmentation import PART_NAMES, body_segmentation
 from darts.crdl.deform import fit_surface, handle_targets, weld_garment
+from darts.crdl.fit import FitSurface
 from darts.crdl.layer import Crdl, CrdlWeights
 from darts.dart.model import Dart
 from darts.geometry.distance import SurfaceDistance
@@ -64,15 +65,16 @@ def _distances(values: np.ndarray) -> dict:
 
 
 def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, faces: np.ndarray,
-                      lines: dict[str, np.ndarray]) -> tuple[Dart, dict]:
+                      lines: dict[str, np.ndarray], surface: FitSurface | None = None) -> tuple[Dart, dict]:
     """The template deformed onto the mesh (``vertices`` [N,3] placed on the body, canonical frame;
+    ``surface``: the body in the template's pose, by default ``darts.crdl.deform.fit_surface`` at rest;
     ``lines``: its loops by the template's line names), and the report: surface distances both ways
     (``dart_to_mesh``, ``mesh_to_dart``: point to surface, mm, with the panels where the farthest
     5 % lie, ``distance_summary``; a mesh point's panel is that of its closest DART face, and
     ``worst_body_parts`` the body parts its farthest points lie over), each line's residual (distance of the
     DART's line vertices to the mesh's loop, mm) and the fraction of vertices inside the body."""
     garment = weld_garment(template)
-    surface = fit_surface(template, body)
+    surface = surface or fit_surface(template, body)
     mesh = SurfaceDistance(vertices, faces)
     line_handles, line_points = handle_targets(garment, {name: vertices[loop] for name, loop in lines.items()})
     line_points = surface.push_out(line_points, CLEARANCE)
