@@ -245,8 +245,8 @@ def damaged_motion(pick) -> bytes:
     return npz_bytes(arrays)
 
 
-#: Each kind of damaged input and how it is made: (file name, bytes) from a pick.
 def _files(kind: str, pick) -> dict[str, bytes]:
+    """A damaged input of ``kind`` (``KINDS``) drawn by ``pick``: file name -> bytes."""
     if kind == "body":
         return {"body.npz": damaged_body_npz(pick)}
     if kind == "body-pickle":

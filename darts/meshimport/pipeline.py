@@ -128,7 +128,7 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
             tried.setdefault(category, []).append((alignment, lowered, surface))
         tried[category].sort(key=lambda placement: placement[0].distance)
     category = min(tried, key=lambda c: tried[c][0][0].distance)
-    registered = []  # (two-way mean distance, alignment, lowered, dart, fit) of the closest placements
+    registered = []  # (two-way mean distance, alignment, lowered, placed mesh, dart, fit) of the closest placements
     for alignment, lowered, surface in tried[category][:REGISTERED_POSES]:
         if options.transform is None and not SCALE_RANGE[0] < alignment.scale < SCALE_RANGE[1]:
             raise DartsInputError(path, f"would need scaling by {alignment.scale:g} or beyond to fit the body "
@@ -137,9 +137,9 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
                                                                      if lowered.degrees else ""))
         placed = apply_matrix(alignment.matrix, vertices)
         dart, fit = register_template(lowered.template, body, placed, faces, alignment.lines, surface)
-        registered.append((fit["dart_to_mesh"]["mean_mm"] + fit["mesh_to_dart"]["mean_mm"], alignment, lowered, dart, fit))
-    _, alignment, lowered, dart, fit = min(registered, key=lambda r: r[0])
-    placed = apply_matrix(alignment.matrix, vertices)
+        registered.append((fit["dart_to_mesh"]["mean_mm"] + fit["mesh_to_dart"]["mean_mm"], alignment, lowered, placed,
+                           dart, fit))
+    _, alignment, lowered, placed, dart, fit = min(registered, key=lambda r: r[0])
     dart = replace(dart, vertices=lowered.rest(dart.vertices).astype(np.float32))
     transform = alignment.matrix @ source.to_canonical
     report = {"source": os.fspath(path), "category": category,

@@ -40,28 +40,32 @@ def _polyline_distance(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
     return np.linalg.norm(points[:, None] - nearest, axis=-1).min(1)
 
 
-#: How many panels a direction's ``worst`` lists.
+#: How many places a direction's ``worst`` lists.
 WORST_PANELS = 3
-
-
-def distance_summary(values: np.ndarray, panels: np.ndarray, names: list[str], kind: str = "panel") -> dict:
-    """Mean, 95th percentile and largest of the distances ``values`` [N] (m, reported in mm), and
-    ``worst``: where the farthest points (those at or beyond the 95th percentile) are — the places
-    (``panels`` [N], indices into ``names``: DART panels, or a ``kind`` of place) holding most of
-    them, each with its share of them and its largest distance (mm), most first, at most ``WORST_PANELS``."""
-    values = np.abs(values)
-    far = values >= np.percentile(values, 95)
-    found, counts = np.unique(panels[far], return_counts=True)
-    worst = [{kind: names[k], "share": float(c / far.sum()), "max_mm": 1e3 * float(values[far & (panels == k)].max())}
-             for k, c in sorted(zip(found, counts), key=lambda item: -item[1])[:WORST_PANELS]]
-    return {"mean_mm": 1e3 * float(values.mean()), "p95_mm": 1e3 * float(np.percentile(values, 95)),
-            "max_mm": 1e3 * float(values.max()), "worst": worst}
 
 
 def _distances(values: np.ndarray) -> dict:
     values = np.abs(values)
     return {"mean_mm": 1e3 * float(values.mean()), "p95_mm": 1e3 * float(np.percentile(values, 95)),
             "max_mm": 1e3 * float(values.max())}
+
+
+def _worst(values: np.ndarray, places: np.ndarray, names: list[str], kind: str) -> list[dict]:
+    """Where the farthest of the distances ``values`` [N] (m) lie — those at or beyond their 95th
+    percentile: the places (``places`` [N], indices into ``names``, each a ``kind`` of place) holding
+    most of them, each with its share of them and its largest distance (mm), most first, at most
+    ``WORST_PANELS``."""
+    values = np.abs(values)
+    far = values >= np.percentile(values, 95)
+    found, counts = np.unique(places[far], return_counts=True)
+    return [{kind: names[k], "share": float(c / far.sum()), "max_mm": 1e3 * float(values[far & (places == k)].max())}
+            for k, c in sorted(zip(found, counts), key=lambda item: -item[1])[:WORST_PANELS]]
+
+
+def distance_summary(values: np.ndarray, panels: np.ndarray, names: list[str]) -> dict:
+    """Mean, 95th percentile and largest of the distances ``values`` [N] (m, reported in mm), and
+    ``worst``: the DART panels (``panels`` [N], indices into ``names``) holding the farthest (``_worst``)."""
+    return {**_distances(values), "worst": _worst(values, panels, names, "panel")}
 
 
 def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, faces: np.ndarray,
@@ -101,7 +105,7 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     names = list(template.panel_names)
     body_face, _ = surface.body.closest_faces(vertices)
     body_part = body_segmentation(body)[body.faces[np.maximum(body_face, 0), 0]]
-    by_part = distance_summary(to_dart, body_part, list(PART_NAMES), "body_part")["worst"]
+    by_part = _worst(to_dart, body_part, list(PART_NAMES), "body_part")
     report = {"dart_to_mesh": distance_summary(to_mesh, vertex_panel, names),
               "mesh_to_dart": {**distance_summary(to_dart, template.panel[np.maximum(nearest_face, 0)], names),
                                "worst_body_parts": by_part},

@@ -233,8 +233,8 @@ def build_template(category_id: str, body: BodyModel, betas=None, edge_length: f
                                     "is not a smooth human one (tangled, noisy or out of proportion)") from None
 
 
-def _cut_from_body(category, body: BodyModel, body_vertices: np.ndarray, joints: np.ndarray, edge_length: float,
-         ease: float) -> Template:
+def _cut_from_body(category: Category, body: BodyModel, body_vertices: np.ndarray, joints: np.ndarray,
+                   edge_length: float, ease: float) -> Template:
     """``build_template``'s template of ``category`` cut from the shaped body (``body_vertices``,
     ``joints``; canonical frame, metres)."""
     lm = landmarks(body_vertices, joints, body.joint_names)
