@@ -75,16 +75,26 @@ def photo_outfits() -> list[str]:
 def imports() -> list[str]:
     """Meshes imported as DARTs (``docs/data/import.json``, written by ``python scripts/evaluate_import.py``)."""
     rows = ["| mesh | category (guessed) | scale | DART→mesh mean / p95 | mesh→DART mean / p95 | lines max | inside body "
-            "| walk: stable, penetration |", "|---|---|---|---|---|---|---|---|"]
+            "| walk: stable, penetration, strain p99 | squat: the same |", "|---|---|---|---|---|---|---|---|---|"]
+
+    def motion(r: dict) -> str:
+        return (f"{'yes' if r['stable'] else 'no'} ({r['simulated_frames']} frames), {100 * r['max_penetration']:.2f} %, "
+                f"{100 * r['strain_p99']:.0f} %")
+
     for name, r in json.loads((DATA / "import.json").read_text()).items():
-        walk = r["walk"]
         rows.append(f"| {name} | {r['category']}{' (guessed)' if 'category_guess_mm' in r else ''} | {r['scale']:.3f} | "
                     f"{r['dart_to_mesh']['mean_mm']:.2f} / {r['dart_to_mesh']['p95_mm']:.2f} | "
                     f"{r['mesh_to_dart']['mean_mm']:.2f} / {r['mesh_to_dart']['p95_mm']:.2f} | "
-                    f"{r['feature_line_max_mm']:.1f} mm | {100 * r['inside_body']:.2f} % | "
-                    f"{'yes' if walk['stable'] else 'no'} ({walk['simulated_frames']} frames), "
-                    f"{100 * walk['max_penetration']:.2f} % |")
+                    f"{r['feature_line_max_mm']:.1f} mm | {100 * r['inside_body']:.2f} % | {motion(r['walk'])} | "
+                    f"{motion(r['squat'])} |")
     return rows
+
+
+def import_round_trip() -> list[str]:
+    """Edited, remeshed DARTs imported back (``docs/data/import_round_trip.json``, written by
+    ``python scripts/import_round_trip.py``)."""
+    script, rows = _script("import_round_trip"), json.loads((DATA / "import_round_trip.json").read_text())
+    return [*script.table(rows), "", script.summary(rows)]
 
 
 def simulation_results() -> list[str]:

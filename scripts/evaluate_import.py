@@ -1,13 +1,15 @@
 """The numbers and picture of docs/import.md: garment meshes made outside the template builder,
-imported with ``darts import`` and simulated on the walk with ``darts-sim`` (default settings).
+imported with ``darts import`` and simulated on the walk and the squat with ``darts-sim`` (default
+settings).
 
     python scripts/evaluate_import.py [--work DIR]
 
 Meshes (written under ``--work``, default ~/.cache/darts/import-eval): a skirt built as an elliptic
 cone of quads (OBJ, metres); the shipped short-sleeve top subdivided, stretched, turned and moved,
 in centimetres, as OBJ (Y up) and as USD (Z up, metersPerUnit 0.01, a translate on the prim); the
-shipped short skirt exported by ``darts export`` (the round trip). Results: docs/data/import.json,
-the picture: docs/images/import_shirt.png.
+shipped short skirt exported by ``darts export`` (the round trip); Newton's example shirt
+(``NEWTON_SHIRT``) where it has been fetched. Results: docs/data/import.json, the picture:
+docs/images/import_shirt.png.
 """
 from __future__ import annotations
 
@@ -27,6 +29,12 @@ from tests.helpers import cone_skirt_obj, remeshed_shirt, write_usd_mesh  # noqa
 #: The console scripts of the environment running this script.
 BIN = Path(sys.executable).parent
 RESULTS = ROOT / "docs" / "data" / "import.json"
+#: A garment made by another project: Newton 1.8's example shirt (``pip download newton==1.8.0
+#: --no-deps``, then unzip ``newton/examples/assets/unisex_shirt.usd`` here); its row is left out
+#: when it is not.
+NEWTON_SHIRT = Path.home() / ".cache" / "darts" / "assets" / "unisex_shirt.usd"
+#: Each imported garment is simulated on these (darts-sim defaults).
+MOTIONS = ("walk", "squat")
 PICTURE = ROOT / "docs" / "images" / "import_shirt.png"
 
 
@@ -42,8 +50,11 @@ def _meshes(work: Path) -> dict[str, Path]:
     write_usd_mesh(work / "shirt_cm_zup.usda", vertices @ y_to_z.T - [0, 0, 10.0], faces, 0.01, "z", (0, 0, 10.0))
     subprocess.run([BIN / "darts", "export", ROOT / "scenes" / "garments" / "short-skirt.npz", "-o", work / "short_skirt.obj"],
                    check=True)
-    return {"cone skirt (OBJ, quads, m)": work / "cone_skirt.obj", "shirt (OBJ, cm, Y up)": work / "shirt_cm_yup.obj",
-            "shirt (USD, cm, Z up)": work / "shirt_cm_zup.usda", "short-skirt round trip (OBJ)": work / "short_skirt.obj"}
+    meshes = {"cone skirt (OBJ, quads, m)": work / "cone_skirt.obj", "shirt (OBJ, cm, Y up)": work / "shirt_cm_yup.obj",
+              "shirt (USD, cm, Z up)": work / "shirt_cm_zup.usda", "short-skirt round trip (OBJ)": work / "short_skirt.obj"}
+    if NEWTON_SHIRT.exists():
+        meshes["Newton's unisex_shirt.usd (USD, cm, Y up)"] = NEWTON_SHIRT
+    return meshes
 
 
 def main() -> None:
@@ -52,19 +63,26 @@ def main() -> None:
     args = parser.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     rows = {}
-    for name, mesh in _meshes(args.work).items():
-        garment, report_path, stats_path = (mesh.with_suffix(s) for s in (".npz", ".report.json", ".stats.json"))
-        png = ["--png", PICTURE] if "USD" in name else []
+    meshes = _meshes(args.work)
+    pictured = list(meshes)[-1]  # Newton's shirt where fetched, else the USD shirt
+    for name, mesh in meshes.items():
+        base = args.work / mesh.stem
+        garment, report_path = base.with_suffix(".npz"), base.with_suffix(".report.json")
+        png = ["--png", PICTURE] if name == pictured else []
         subprocess.run([BIN / "darts", "import", mesh, "-o", garment, "--report", report_path, "--quiet", *png], check=True)
-        subprocess.run([BIN / "darts-sim", garment, "walk", "-o", mesh.with_suffix(".usdc"), "--stats", stats_path, "--quiet"],
-                       check=True)
-        report, stats = json.loads(report_path.read_text()), json.loads(stats_path.read_text())
+        motions = {}
+        for motion in MOTIONS:
+            stats_path = base.with_suffix(f".{motion}.stats.json")
+            subprocess.run([BIN / "darts-sim", garment, motion, "-o", base.with_suffix(f".{motion}.usdc"), "--stats", stats_path,
+                            "--quiet"], check=True)
+            stats = json.loads(stats_path.read_text())
+            motions[motion] = {k: stats[k] for k in ("stable", "simulated_frames", "max_penetration", "strain_p99", "sim_fps")}
+        report = json.loads(report_path.read_text())
         rows[name] = {"category": report["category"], "category_guess_mm": report["category_guess"],
                       "scale": report["scale"], "dart_to_mesh": report["dart_to_mesh"],
                       "mesh_to_dart": report["mesh_to_dart"],
                       "feature_line_max_mm": max(v["max_mm"] for v in report["feature_lines"].values()),
-                      "inside_body": report["inside_body"],
-                      "walk": {k: stats[k] for k in ("stable", "simulated_frames", "max_penetration", "strain_p99", "sim_fps")}}
+                      "inside_body": report["inside_body"], **motions}
         if "round trip" in name:
             from darts.dart.io import load_dart
 

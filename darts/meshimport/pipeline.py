@@ -30,7 +30,9 @@ GARMENT_EXTENT = (0.05, 3.0)
 @dataclass
 class ImportOptions:
     """What ``darts import`` may be told: the category, units, up axis, USD prim, an explicit 4x4
-    (file -> DART frame, replacing the alignment), the body and its shape."""
+    (file -> DART frame, replacing the alignment), the body and its shape, whether the placement
+    may resize the garment (``fit_scale``; default rigid, ``darts.meshimport.align``) and whether
+    the file's own mesh becomes the DART (``own_mesh``, ``darts.meshimport.own_mesh``)."""
 
     category: str | None = None
     units: str | None = None
@@ -39,16 +41,22 @@ class ImportOptions:
     transform: np.ndarray | None = None
     body: str | os.PathLike | None = None
     betas: list[float] | None = None
+    fit_scale: bool = False
+    own_mesh: bool = False
 
 
 @dataclass
 class ImportResult:
-    """The DART, the report, and the mesh as placed on the body (canonical frame) it was fitted to."""
+    """The DART, the report, the mesh as placed on the body (canonical frame) it was fitted to, the
+    registered template at rest (the DART unless ``own_mesh``) and the two distances of its
+    registration per point (``darts.meshimport.register.RegistrationDistances``)."""
 
     dart: object
     report: dict
     placed_vertices: np.ndarray
     faces: np.ndarray
+    distances: object
+    template: object
 
 
 def _candidates(path, loops: list, category: str | None) -> list[str]:
@@ -93,11 +101,12 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
     """The DART of the mesh file ``path`` and its report; see the module docstring.
     ``progress(text)`` is told each step."""
     from darts.body.io import load_body
-    from darts.crdl.deform import weld_garment
+    from darts.crdl.deform import fit_surface, weld_garment
     from darts.crdl.fit import FitSurface
     from darts.meshimport.align import SCALE_RANGE, align_to_template, apply_matrix, naming_only
+    from darts.meshimport.own_mesh import dart_from_mesh
     from darts.meshimport.pose import arm_angles, lower_arms
-    from darts.meshimport.register import register_template
+    from darts.meshimport.register import distance_stats, register_template
 
     options = options or ImportOptions()
     say = progress or (lambda text: None)
@@ -124,29 +133,36 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
                 alignment = naming_only(vertices, faces, loops, CATEGORIES[category], placed, welded)
             else:
                 alignment = align_to_template(vertices, faces, loops, CATEGORIES[category], welded.vertices,
-                                              welded.faces, welded.lines, surface)
+                                              welded.faces, welded.lines, surface, fit_scale=options.fit_scale)
             tried.setdefault(category, []).append((alignment, lowered, surface))
         tried[category].sort(key=lambda placement: placement[0].distance)
     category = min(tried, key=lambda c: tried[c][0][0].distance)
-    registered = []  # (two-way mean distance, alignment, lowered, placed mesh, dart, fit) of the closest placements
+    registered = []  # (two-way mean, alignment, lowered, placed mesh, dart, fit, distances) per placement
     for alignment, lowered, surface in tried[category][:REGISTERED_POSES]:
-        if options.transform is None and not SCALE_RANGE[0] < alignment.scale < SCALE_RANGE[1]:
-            raise DartsInputError(path, f"would need scaling by {alignment.scale:g} or beyond to fit the body "
+        if options.transform is None and not SCALE_RANGE[0] < alignment.estimated_scale < SCALE_RANGE[1]:
+            raise DartsInputError(path, f"would need scaling by {alignment.estimated_scale:g} or beyond to fit the body "
                                         f"(at most {SCALE_RANGE[0]}-{SCALE_RANGE[1]}): check --units")
         say(f"registering the {category} template onto the mesh" + (f", arms lowered {lowered.degrees:g} deg"
                                                                      if lowered.degrees else ""))
         placed = apply_matrix(alignment.matrix, vertices)
-        dart, fit = register_template(lowered.template, body, placed, faces, alignment.lines, surface)
+        dart, fit, distances = register_template(lowered.template, body, placed, faces, alignment.lines, surface)
         registered.append((fit["dart_to_mesh"]["mean_mm"] + fit["mesh_to_dart"]["mean_mm"], alignment, lowered, placed,
-                           dart, fit))
-    _, alignment, lowered, placed, dart, fit = min(registered, key=lambda r: r[0])
-    dart = replace(dart, vertices=lowered.rest(dart.vertices).astype(np.float32))
+                           dart, fit, distances))
+    _, alignment, lowered, placed, posed, fit, distances = min(registered, key=lambda r: r[0])
+    template = replace(posed, vertices=lowered.rest(posed.vertices).astype(np.float32))
+    dart = template
+    if options.own_mesh:
+        say("cutting the mesh into the template's panels")
+        dart, moved = dart_from_mesh(posed, placed, faces, alignment.lines, fit_surface(template, body), lowered)
+        fit = {**fit, "moved_out_of_body": {**distance_stats(moved), "share": float((moved > 0).mean())}}
     transform = alignment.matrix @ source.to_canonical
     report = {"source": os.fspath(path), "category": category,
               "category_guess": None if options.category else {c: 1e3 * t[0][0].distance for c, t in tried.items()},
               "transform": transform.tolist(), "scale": alignment.scale,
+              "estimated_scale": alignment.estimated_scale,
               "placement": "--transform" if options.transform is not None else "aligned to the template's openings",
               "placement_distance_mm": 1e3 * alignment.distance, "arms_lowered_degrees": lowered.degrees,
               "notes": notes,
-              "mesh": {"vertices": len(vertices), "faces": len(faces), "openings": len(loops)}, **fit}
-    return ImportResult(dart, report, placed, faces)
+              "mesh": {"vertices": len(vertices), "faces": len(faces), "openings": len(loops)},
+              "dart_surface": "the file's mesh" if options.own_mesh else "the registered template", **fit}
+    return ImportResult(dart, report, placed, faces, template=template, distances=distances)

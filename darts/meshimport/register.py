@@ -4,14 +4,18 @@ The template (its seams welded) is deformed by the CRDL (``darts.crdl.layer``) w
 handle: every feature-line vertex pulled to its arc-length match on the mesh's loop of that name
 (multiplier 1), and every vertex pulled to its closest point on the mesh, moved ``CLEARANCE`` out of the body
 where it lies in or near it (multiplier m_r). Rounds
-r recompute the closest points from the last result, with m_r rising along ``STIFFNESS_SCHEDULE``
-(stiff first, so the template turns and slides as a whole before it follows the surface's detail),
+r recompute the closest points from the last result, with m_r rising along ``STIFFNESS_SCHEDULE``:
+first 0, the lines alone (the CRDL edit that takes the template's openings to the mesh's: the
+panels stretch as the garment's own edit stretched them, so its seams land where that edit put
+them; started from the closest points, the stretch slid to the nearest panels and a sleeve 7.5 cm
+longer left the armhole seams 28 mm from the original's, this 2 mm), then stiff, so the template
+turns and slides as a whole before it follows the surface's detail,
 the fit term keeping it outside the body throughout. The result keeps the template's panels,
 seams, regimes and accessories: it is a full DART in the canonical frame (Y up, metres).
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -24,7 +28,7 @@ from darts.dart.model import Dart
 from darts.geometry.distance import SurfaceDistance
 
 #: Multipliers (of the handle weight) of the closest-point pull, one CRDL solve per round.
-STIFFNESS_SCHEDULE = (0.002, 0.01, 0.03, 0.1, 0.3, 0.3)
+STIFFNESS_SCHEDULE = (0.0, 0.002, 0.01, 0.03, 0.1, 0.3, 0.3)
 #: Metres outside the body (or the skirts' hull) the closest-point targets are kept: the CRDL's margin.
 CLEARANCE = CrdlWeights().margin
 #: Local-global iterations per round.
@@ -44,7 +48,7 @@ def _polyline_distance(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
 WORST_PANELS = 3
 
 
-def _distances(values: np.ndarray) -> dict:
+def distance_stats(values: np.ndarray) -> dict:
     values = np.abs(values)
     return {"mean_mm": 1e3 * float(values.mean()), "p95_mm": 1e3 * float(np.percentile(values, 95)),
             "max_mm": 1e3 * float(values.max())}
@@ -65,18 +69,29 @@ def _worst(values: np.ndarray, places: np.ndarray, names: list[str], kind: str) 
 def distance_summary(values: np.ndarray, panels: np.ndarray, names: list[str]) -> dict:
     """Mean, 95th percentile and largest of the distances ``values`` [N] (m, reported in mm), and
     ``worst``: the DART panels (``panels`` [N], indices into ``names``) holding the farthest (``_worst``)."""
-    return {**_distances(values), "worst": _worst(values, panels, names, "panel")}
+    return {**distance_stats(values), "worst": _worst(values, panels, names, "panel")}
+
+
+@dataclass
+class RegistrationDistances:
+    """Per point, metres: each DART vertex to the mesh (``dart_to_mesh`` [V]) and each mesh vertex to
+    the DART (``mesh_to_dart`` [N]), as the report summarises them."""
+
+    dart_to_mesh: np.ndarray
+    mesh_to_dart: np.ndarray
 
 
 def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, faces: np.ndarray,
-                      lines: dict[str, np.ndarray], surface: FitSurface | None = None) -> tuple[Dart, dict]:
+                      lines: dict[str, np.ndarray], surface: FitSurface | None = None
+                      ) -> tuple[Dart, dict, RegistrationDistances]:
     """The template deformed onto the mesh (``vertices`` [N,3] placed on the body, canonical frame;
     ``surface``: the body in the template's pose, by default ``darts.crdl.deform.fit_surface`` at rest;
     ``lines``: its loops by the template's line names), and the report: surface distances both ways
     (``dart_to_mesh``, ``mesh_to_dart``: point to surface, mm, with the panels where the farthest
     5 % lie, ``distance_summary``; a mesh point's panel is that of its closest DART face, and
     ``worst_body_parts`` the body parts its farthest points lie over), each line's residual (distance of the
-    DART's line vertices to the mesh's loop, mm) and the fraction of vertices inside the body."""
+    DART's line vertices to the mesh's loop, mm) and the fraction of vertices inside the body; and the
+    distances it summarises, per point."""
     garment = weld_garment(template)
     surface = surface or fit_surface(template, body)
     mesh = SurfaceDistance(vertices, faces)
@@ -100,7 +115,7 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     vertex_panel = np.zeros(count, np.int64)
     vertex_panel[garment.faces.reshape(-1)] = np.repeat(template.panel, 3)  # welded faces keep the DART's order
     nearest_face, _ = registered.closest_faces(vertices)
-    residuals = {name: _distances(_polyline_distance(points[garment.lines[name]], vertices[loop]))
+    residuals = {name: distance_stats(_polyline_distance(points[garment.lines[name]], vertices[loop]))
                  for name, loop in lines.items()}
     names = list(template.panel_names)
     body_face, _ = surface.body.closest_faces(vertices)
@@ -110,4 +125,4 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
               "mesh_to_dart": {**distance_summary(to_dart, template.panel[np.maximum(nearest_face, 0)], names),
                                "worst_body_parts": by_part},
               "feature_lines": residuals, "inside_body": surface.inside_fraction(points)}
-    return dart, report
+    return dart, report, RegistrationDistances(np.abs(to_mesh[garment.index]), np.abs(to_dart))

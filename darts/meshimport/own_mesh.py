@@ -1,0 +1,195 @@
+"""The imported mesh itself as the DART (``darts import --own-mesh``): the registered template lends
+it its panels, seams, seam regimes, material and feature-line names; the surface, its triangles
+and whatever the template lacks (a collar, a pocket, a ruffle) are the file's.
+
+1. **Panels**: each mesh triangle takes the panel of the registered template's face closest to its
+   centroid; ``SMOOTHING_ROUNDS`` rounds of a majority vote over each triangle and its edge
+   neighbours straighten the borders, and a patch of one panel under ``MIN_PATCH`` triangles is
+   given to the panel around it. A detail the template lacks lies nearest the panel it is
+   attached to, and becomes part of it.
+2. **Cut**: a vertex on a border between k panels becomes k vertices, one per panel; every two of
+   them are a seam pair, on the seam of the nearest template pair between the same two panels
+   (two panels may share several seams: the shoulders and the sides), at that pair's position
+   along it; a border the template has no seam for is a new stiff seam named after both panels.
+   A seam inside one panel (a sleeve's underarm) is not cut: the panel stays one piece there.
+3. **Lines**: the mesh's openings, named when it was placed, run through both copies where they
+   cross a cut, as in every DART.
+4. **Rest pose**: a mesh placed with the arms lowered is taken back to rest vertex by vertex by the
+   blended transform of its nearest template vertex (``darts.meshimport.pose``).
+5. **Out of the body**: a garment smaller than this body somewhere (made for another avatar:
+   Newton's shirt at its own size has 13 % of its vertices up to 21 mm inside the default body's
+   chest) is then moved out (``out_of_body``).
+Canonical frame, Y up, metres.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from itertools import combinations
+
+import numpy as np
+
+from darts.dart.model import Dart, Seam
+
+#: Rounds of the majority vote over each triangle's edge neighbours.
+SMOOTHING_ROUNDS = 3
+#: A connected patch of one panel with fewer triangles joins the panel around it.
+MIN_PATCH = 30
+
+
+def _edge_neighbours(faces: np.ndarray) -> np.ndarray:
+    """[F,3] the triangle across each edge of each triangle (-1 on an opening)."""
+    edges = np.sort(np.stack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]], 1), axis=2).reshape(-1, 2)
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    ordered = edges[order]
+    same = np.all(ordered[1:] == ordered[:-1], axis=1)
+    neighbours = np.full(len(edges), -1)
+    first, second = order[:-1][same], order[1:][same]
+    neighbours[first], neighbours[second] = second // 3, first // 3
+    return neighbours.reshape(-1, 3)
+
+
+def _smoothed(labels: np.ndarray, neighbours: np.ndarray, count: int) -> np.ndarray:
+    """``labels`` [F] after ``SMOOTHING_ROUNDS`` majority votes over each triangle and its
+    neighbours (ties keep the triangle's own), then small patches merged (module docstring)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    labels = labels.copy()
+    for _ in range(SMOOTHING_ROUNDS):
+        votes = np.zeros((len(labels), count), np.int64)
+        np.add.at(votes, (np.arange(len(labels)), labels), 2)  # its own vote breaks ties
+        for k in range(3):
+            there = neighbours[:, k] >= 0
+            np.add.at(votes, (np.flatnonzero(there), labels[neighbours[there, k]]), 1)
+        labels = votes.argmax(1)
+    rows = np.repeat(np.arange(len(labels)), 3)
+    columns = neighbours.reshape(-1)
+    keep = (columns >= 0) & (labels[rows] == labels[np.maximum(columns, 0)])
+    graph = coo_matrix((np.ones(keep.sum()), (rows[keep], columns[keep])), shape=(len(labels),) * 2)
+    _, patch = connected_components(graph, directed=False)
+    sizes = np.bincount(patch)
+    for small in np.flatnonzero(sizes < MIN_PATCH):
+        members = np.flatnonzero(patch == small)
+        around = labels[neighbours[members][neighbours[members] >= 0]]
+        around = around[around != labels[members[0]]]
+        if len(around):
+            labels[members] = np.bincount(around, minlength=count).argmax()
+    return labels
+
+
+def _vertex_panels(dart: Dart) -> np.ndarray:
+    """[V] the panel of each DART vertex (panels are split at the seams: one each)."""
+    panel = np.full(len(dart.vertices), -1)
+    panel[np.asarray(dart.faces).reshape(-1)] = np.repeat(np.asarray(dart.panel), 3)
+    return panel
+
+
+def out_of_body(vertices: np.ndarray, faces: np.ndarray, surface) -> np.ndarray:
+    """``vertices`` [N,3] (a welded mesh) with the parts in or within ``CLEARANCE`` of the body
+    (``surface``, a ``FitSurface`` in the mesh's pose) moved out by one CRDL solve: every vertex a
+    handle at its place, those pushed out (``FitSurface.push_out``) at a tenth of the weight, so
+    the ARAP term spreads the move over the cloth around them and the fit term keeps them out."""
+    from darts.crdl.layer import Crdl
+    from darts.meshimport.register import CLEARANCE, ROUND_ITERATIONS
+
+    targets = surface.push_out(vertices, CLEARANCE)
+    moved = np.linalg.norm(targets - vertices, axis=1) > 0
+    if not moved.any():
+        return vertices
+    layer = Crdl(vertices, faces, np.arange(len(vertices)), surface, handle_weights=np.where(moved, 0.1, 1.0))
+    return layer.solve_local_global(targets, iterations=ROUND_ITERATIONS).vertices
+
+
+def dart_from_mesh(template: Dart, vertices: np.ndarray, faces: np.ndarray, lines: dict[str, np.ndarray],
+                   surface, rest=None) -> tuple[Dart, np.ndarray]:
+    """The DART made of the mesh ``vertices`` [N,3], ``faces`` [F,3] (placed on the body, in the
+    pose of the registered ``template``), its openings ``lines`` (name -> loop of mesh vertex
+    indices), with ``rest`` (``darts.meshimport.pose.LoweredArms``, or None at rest) taking it back
+    to the rest pose, and there moved out of the body (``out_of_body``; ``surface``: the body at
+    rest, a ``FitSurface``) (module docstring)."""
+    from darts.geometry.distance import SurfaceDistance
+
+    faces = np.asarray(faces, np.int64)
+    vertices = np.asarray(vertices, np.float64)
+    template_vertices = np.asarray(template.vertices, np.float64)
+    closest, _ = SurfaceDistance(template_vertices, template.faces).closest_faces(vertices[faces].mean(1))
+    labels = np.asarray(template.panel)[np.maximum(closest, 0)]
+    labels = _smoothed(labels, _edge_neighbours(faces), len(template.panel_names))
+
+    # the cut: one copy of each vertex per panel it touches
+    keys = np.stack([faces.reshape(-1), np.repeat(labels, 3)], 1)
+    copies, copy_of_corner = np.unique(keys, axis=0, return_inverse=True)
+    new_faces = copy_of_corner.reshape(-1, 3)
+    source = copies[:, 0]
+
+    # seam pairs between the copies of one vertex, each on the seam of the nearest template pair
+    # between the same two panels (two panels may share several seams: shoulders and sides)
+    pairs, pair_panels = [], []
+    starts = np.flatnonzero(np.r_[True, source[1:] != source[:-1]])
+    for start, end in zip(starts, np.r_[starts[1:], len(source)]):
+        for a, b in combinations(range(start, end), 2):
+            pairs.append((a, b))
+            pair_panels.append(sorted((int(copies[a, 1]), int(copies[b, 1]))))
+    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+    seams, pair_seam, pair_position = _seams_of(template, vertices[source], pairs, np.asarray(pair_panels).reshape(-1, 2))
+
+    # openings through both copies where they cross a cut
+    corner_panel = {}
+    for f, face in enumerate(faces):
+        for k in range(3):
+            corner_panel.setdefault((int(face[k]), int(face[(k + 1) % 3])), labels[f])
+            corner_panel.setdefault((int(face[(k + 1) % 3]), int(face[k])), labels[f])
+    copy_index = {(int(v), int(p)): i for i, (v, p) in enumerate(copies)}
+    new_lines = {}
+    for name, loop in lines.items():
+        loop = [int(v) for v in loop]
+        walk = []
+        for k, v in enumerate(loop):
+            before = corner_panel[(loop[k - 1], v)]
+            after = corner_panel[(v, loop[(k + 1) % len(loop)])]
+            walk.append(copy_index[(v, int(before))])
+            if after != before:
+                walk.append(copy_index[(v, int(after))])
+        new_lines[name] = np.asarray(walk, np.int32)
+
+    positions = vertices
+    if rest is not None:
+        _, nearest = _nearest_vertices(template_vertices, positions)
+        positions = np.linalg.solve(rest.linear[nearest], (positions - rest.offset[nearest])[..., None])[..., 0]
+    outside = out_of_body(positions, faces, surface)
+    moved = np.linalg.norm(outside - positions, axis=1)
+    return replace(template, vertices=outside[source].astype(np.float32), faces=new_faces.astype(np.int32),
+                   panel=labels.astype(np.int32), lines=new_lines, seams=seams, pairs=pairs.astype(np.int32),
+                   pair_seam=pair_seam.astype(np.int32), pair_position=pair_position.astype(np.float32)), moved
+
+
+def _nearest_vertices(reference: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(distance [N], index [N]) of each point's nearest ``reference`` vertex."""
+    from scipy.spatial import cKDTree
+
+    return cKDTree(reference).query(points)
+
+
+def _seams_of(template: Dart, vertices: np.ndarray, pairs: np.ndarray,
+              pair_panels: np.ndarray) -> tuple[list[Seam], np.ndarray, np.ndarray]:
+    """(the seams: the template's and one new stiff seam per pair of panels it has none between;
+    each pair's seam [P]; its position along it [P]: the nearest template pair's between the same
+    two panels, 0 on a new seam). ``vertices`` are the copies', ``pair_panels`` [P,2] sorted."""
+    seams = list(template.seams)
+    pair_seam, positions = np.zeros(len(pairs), np.int64), np.zeros(len(pairs))
+    template_pairs = np.asarray(template.pairs)
+    template_panels = np.sort(_vertex_panels(template)[template_pairs], axis=1)
+    template_middle = np.asarray(template.vertices, np.float64)[template_pairs].mean(1)
+    middle = vertices[pairs].mean(1) if len(pairs) else np.zeros((0, 3))
+    for panels in np.unique(pair_panels, axis=0):
+        mine = np.all(pair_panels == panels, axis=1)
+        theirs = np.all(template_panels == panels, axis=1)
+        if theirs.any():
+            _, nearest = _nearest_vertices(template_middle[theirs], middle[mine])
+            pair_seam[mine] = np.asarray(template.pair_seam)[theirs][nearest]
+            positions[mine] = np.asarray(template.pair_position)[theirs][nearest]
+        else:
+            names = [template.panel_names[p] for p in panels]
+            seams.append(Seam(f"{names[0]}_{names[1]}"))
+            pair_seam[mine] = len(seams) - 1
+    return seams, pair_seam, positions
