@@ -507,6 +507,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "sim-settings": ("docs/simulation.md", sim_settings),
     "photo-outfits": ("docs/reconstruction.md", photo_outfits),
     "import": ("docs/import.md", imports),
+    "import-round-trip": ("docs/import.md", import_round_trip),
     "simulation-results": ("docs/simulation.md", simulation_results),
     "seam-regimes": ("docs/simulation.md", seam_regimes),
     "outfits": ("docs/simulation.md", outfits),

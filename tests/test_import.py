@@ -218,15 +218,20 @@ def test_an_edited_remeshed_garment_in_millimetres_comes_back_at_its_size_and_pl
 @pytest.mark.slow
 def test_own_mesh_keeps_a_collar_the_template_lacks(tmp_path, run_darts, run_sim):
     """Issue 47, details: a T-shirt built with the collar accessory, remeshed and written in
-    centimetres, imported with ``--own-mesh``: its surface comes back whole, collar included (the
-    registered template, which has no collar, leaves it out: docs/import.md's round trip), cut into
-    the template's four panels with the collar part of the one it is sewn to, and it simulates."""
+    centimetres: the registered template, which has no collar, leaves it out and the command says
+    so; imported with ``--own-mesh`` its surface comes back whole, collar included, cut into the
+    template's four panels with the collar part of the one it is sewn to, and it simulates."""
     import darts
     from tests.helpers import isotropic_remesh, round_trip_distances
 
     original = darts.template("short-sleeve-top", accessories=["collar"])
     vertices, faces = isotropic_remesh(original, 1.0)
     trimesh.Trimesh(100.0 * vertices, faces, process=False).export(tmp_path / "collar.obj")
+    code, out, err = run_darts("import", tmp_path / "collar.obj", "-o", tmp_path / "template.npz", "--report",
+                               tmp_path / "template.json")
+    assert code == 0, err
+    assert json.loads((tmp_path / "template.json").read_text())["mesh_to_dart"]["p95_mm"] > 8.0
+    assert "--own-mesh keeps the file's own surface" in out  # the template leaves the collar out, and says so
     code, _, err = run_darts("import", tmp_path / "collar.obj", "-o", tmp_path / "g.npz", "--own-mesh", "--report",
                              tmp_path / "r.json", "--quiet")
     assert code == 0, err

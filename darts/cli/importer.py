@@ -38,6 +38,9 @@ def parse_transform(text: str) -> np.ndarray:
 #: The colour scale's top of the import picture's distances (mm; issue 47's p95 bar): farther is
 #: drawn as this.
 PICTURE_MAX_MM = 8.0
+#: Beyond this p95 of the mesh's distance to the registered template (mm), the command suggests
+#: --own-mesh.
+OWN_MESH_HINT_MM = 8.0
 
 
 def render_import_png(result, path) -> None:
@@ -117,6 +120,9 @@ def import_mesh(args) -> int:
     places = ", ".join(f"{100 * p['share']:.0f} % over the {p['body_part'].replace('_', ' ')}" for p in far["worst_body_parts"])
     print(f"the mesh's farthest 5 % from the {fitted} ({far['p95_mm']:.1f} mm and beyond, up to {far['max_mm']:.1f} mm): "
           f"{places}; nearest {fitted} panel {far['worst'][0]['panel']}")
+    if not args.own_mesh and far["p95_mm"] > OWN_MESH_HINT_MM:
+        print(f"over 5 % of the mesh lies more than {OWN_MESH_HINT_MM:g} mm from the template (a collar, a pocket, a shape "
+              f"it lacks?): --own-mesh keeps the file's own surface")
     return 0
 
 
