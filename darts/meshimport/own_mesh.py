@@ -122,35 +122,9 @@ def dart_from_mesh(template: Dart, vertices: np.ndarray, faces: np.ndarray, line
     new_faces = copy_of_corner.reshape(-1, 3)
     source = copies[:, 0]
 
-    # seam pairs between the copies of one vertex, each on the seam of the nearest template pair
-    # between the same two panels (two panels may share several seams: shoulders and sides)
-    pairs, pair_panels = [], []
-    starts = np.flatnonzero(np.r_[True, source[1:] != source[:-1]])
-    for start, end in zip(starts, np.r_[starts[1:], len(source)]):
-        for a, b in combinations(range(start, end), 2):
-            pairs.append((a, b))
-            pair_panels.append(sorted((int(copies[a, 1]), int(copies[b, 1]))))
-    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
-    seams, pair_seam, pair_position = _seams_of(template, vertices[source], pairs, np.asarray(pair_panels).reshape(-1, 2))
-
-    # openings through both copies where they cross a cut
-    corner_panel = {}
-    for f, face in enumerate(faces):
-        for k in range(3):
-            corner_panel.setdefault((int(face[k]), int(face[(k + 1) % 3])), labels[f])
-            corner_panel.setdefault((int(face[(k + 1) % 3]), int(face[k])), labels[f])
-    copy_index = {(int(v), int(p)): i for i, (v, p) in enumerate(copies)}
-    new_lines = {}
-    for name, loop in lines.items():
-        loop = [int(v) for v in loop]
-        walk = []
-        for k, v in enumerate(loop):
-            before = corner_panel[(loop[k - 1], v)]
-            after = corner_panel[(v, loop[(k + 1) % len(loop)])]
-            walk.append(copy_index[(v, int(before))])
-            if after != before:
-                walk.append(copy_index[(v, int(after))])
-        new_lines[name] = np.asarray(walk, np.int32)
+    pairs, pair_panels = _copy_pairs(copies)
+    seams, pair_seam, pair_position = _seams_of(template, vertices[source], pairs, pair_panels)
+    new_lines = {name: _through_copies(loop, faces, labels, copies) for name, loop in lines.items()}
 
     positions = vertices
     if rest is not None:
@@ -161,6 +135,38 @@ def dart_from_mesh(template: Dart, vertices: np.ndarray, faces: np.ndarray, line
     return replace(template, vertices=outside[source].astype(np.float32), faces=new_faces.astype(np.int32),
                    panel=labels.astype(np.int32), lines=new_lines, seams=seams, pairs=pairs.astype(np.int32),
                    pair_seam=pair_seam.astype(np.int32), pair_position=pair_position.astype(np.float32)), moved
+
+
+def _copy_pairs(copies: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(seam pairs [P,2]: every two copies of one mesh vertex, indices into ``copies`` [C,2] (mesh
+    vertex, panel; sorted by vertex); their panels [P,2], sorted)."""
+    source = copies[:, 0]
+    pairs, panels = [], []
+    starts = np.flatnonzero(np.r_[True, source[1:] != source[:-1]])
+    for start, end in zip(starts, np.r_[starts[1:], len(source)]):
+        for a, b in combinations(range(start, end), 2):
+            pairs.append((a, b))
+            panels.append(sorted((int(copies[a, 1]), int(copies[b, 1]))))
+    return np.asarray(pairs, np.int64).reshape(-1, 2), np.asarray(panels, np.int64).reshape(-1, 2)
+
+
+def _through_copies(loop: np.ndarray, faces: np.ndarray, labels: np.ndarray, copies: np.ndarray) -> np.ndarray:
+    """The opening ``loop`` (mesh vertices in order) as copies (``copies`` [C,2]: mesh vertex,
+    panel): each vertex's copy in the panel of the opening's edge before it, and where the edge
+    after it lies in another panel (a cut crosses the opening there), that panel's copy too."""
+    edge_panel = {}
+    for face, label in zip(faces.tolist(), labels.tolist()):
+        for k in range(3):
+            edge_panel[(face[k], face[(k + 1) % 3])] = edge_panel[(face[(k + 1) % 3], face[k])] = label
+    copy_index = {(int(v), int(p)): i for i, (v, p) in enumerate(copies)}
+    loop = [int(v) for v in loop]
+    walk = []
+    for k, vertex in enumerate(loop):
+        before, after = edge_panel[(loop[k - 1], vertex)], edge_panel[(vertex, loop[(k + 1) % len(loop)])]
+        walk.append(copy_index[(vertex, before)])
+        if after != before:
+            walk.append(copy_index[(vertex, after)])
+    return np.asarray(walk, np.int32)
 
 
 def _nearest_vertices(reference: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
