@@ -1,5 +1,6 @@
 """A garment mesh made elsewhere as a DART: read, repair, place on the body, name its openings,
-register the category template onto it (``darts import``).
+register the category template onto it, and with ``own_mesh`` cut the mesh itself into the
+template's panels (``darts import``).
 
 Frames: the file's points as stored -> (``SourceMesh.to_canonical``: units, up axis, a USD prim's
 transform) canonical frame, Y up, metres -> (the alignment, or ``--transform``) on the body, posed
