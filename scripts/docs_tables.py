@@ -82,11 +82,15 @@ def imports() -> list[str]:
                 f"{100 * r['strain_p99']:.0f} %")
 
     for name, r in json.loads((DATA / "import.json").read_text()).items():
+        if "moved_out_of_body" in r:  # --own-mesh: the DART is the file (its openings the lines), moved out of the body
+            moved = r["moved_out_of_body"]
+            fit = f"the file, moved out of the body {moved['mean_mm']:.2f} / {moved['p95_mm']:.2f} | – | – | – "
+        else:
+            fit = (f"{r['dart_to_mesh']['mean_mm']:.2f} / {r['dart_to_mesh']['p95_mm']:.2f} | "
+                   f"{r['mesh_to_dart']['mean_mm']:.2f} / {r['mesh_to_dart']['p95_mm']:.2f} | "
+                   f"{r['feature_line_max_mm']:.1f} mm | {100 * r['inside_body']:.2f} % ")
         rows.append(f"| {name} | {r['category']}{' (guessed)' if 'category_guess_mm' in r else ''} | {r['scale']:.3f} | "
-                    f"{r['dart_to_mesh']['mean_mm']:.2f} / {r['dart_to_mesh']['p95_mm']:.2f} | "
-                    f"{r['mesh_to_dart']['mean_mm']:.2f} / {r['mesh_to_dart']['p95_mm']:.2f} | "
-                    f"{r['feature_line_max_mm']:.1f} mm | {100 * r['inside_body']:.2f} % | {motion(r['walk'])} | "
-                    f"{motion(r['squat'])} |")
+                    f"{fit}| {motion(r['walk'])} | {motion(r['squat'])} |")
     return rows
 
 
