@@ -179,17 +179,11 @@ def _surface_samples(vertices: np.ndarray, faces: np.ndarray, count: int, seed: 
     return np.asarray(points)
 
 
-def _summary(values: np.ndarray) -> dict:
-    values = 1e3 * np.abs(values)
-    return {"mean_mm": float(values.mean()), "p95_mm": float(np.percentile(values, 95)), "max_mm": float(values.max())}
-
-
 def seam_edges(dart) -> np.ndarray:
     """[E,2,3] the panel-boundary edges of ``dart`` both of whose ends are seam vertices."""
-    faces = np.asarray(dart.faces)
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    unique, counts = np.unique(edges, axis=0, return_counts=True)
-    boundary = unique[counts == 1]
+    from darts.geometry.mesh import boundary_edges
+
+    boundary = boundary_edges(np.asarray(dart.faces))
     on_seam = np.zeros(len(dart.vertices), bool)
     on_seam[np.asarray(dart.pairs).reshape(-1)] = True
     kept = boundary[on_seam[boundary[:, 0]] & on_seam[boundary[:, 1]]]
@@ -216,6 +210,7 @@ def round_trip_distances(imported: Dart, original: Dart, seed: int = 0) -> dict:
     within ``SEAM_TOLERANCE``)."""
     from darts.dart.model import welded
     from darts.geometry.distance import SurfaceDistance
+    from darts.meshimport.register import distance_stats
 
     result = {}
     surfaces = {name: welded(dart)[:2] for name, dart in (("imported", imported), ("original", original))}
@@ -223,7 +218,7 @@ def round_trip_distances(imported: Dart, original: Dart, seed: int = 0) -> dict:
                                  ("original_to_imported", "original", "imported")):
         samples = _surface_samples(np.asarray(surfaces[source][0], np.float64), surfaces[source][1], ROUND_TRIP_SAMPLES, seed)
         distance, _, _ = SurfaceDistance(*surfaces[target]).query(samples, winding=False)
-        result[name] = _summary(distance)
+        result[name] = distance_stats(distance)
     seams = seam_offsets(imported, original)
     result["seams"] = {"mean_mm": 1e3 * float(seams.mean()), "max_mm": 1e3 * float(seams.max()),
                        "within_5mm": float((seams <= SEAM_TOLERANCE).mean()), "vertices": len(seams)}

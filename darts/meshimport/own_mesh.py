@@ -37,13 +37,11 @@ MIN_PATCH = 30
 
 
 def _edge_neighbours(faces: np.ndarray) -> np.ndarray:
-    """[F,3] the triangle across each edge of each triangle (-1 on an opening)."""
-    edges = np.sort(np.stack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]], 1), axis=2).reshape(-1, 2)
-    order = np.lexsort((edges[:, 1], edges[:, 0]))
-    ordered = edges[order]
-    same = np.all(ordered[1:] == ordered[:-1], axis=1)
-    neighbours = np.full(len(edges), -1)
-    first, second = order[:-1][same], order[1:][same]
+    """[F,3] the triangle across each edge k (corner k to k + 1) of each triangle (-1 on an opening)."""
+    from darts.geometry.mesh import half_edges, interior_edge_halves
+
+    first, second = interior_edge_halves(half_edges(faces)[2])
+    neighbours = np.full(3 * len(faces), -1)
     neighbours[first], neighbours[second] = second // 3, first // 3
     return neighbours.reshape(-1, 3)
 
@@ -126,10 +124,7 @@ def dart_from_mesh(template: Dart, vertices: np.ndarray, faces: np.ndarray, line
     seams, pair_seam, pair_position = _seams_of(template, vertices[source], pairs, pair_panels)
     new_lines = {name: _through_copies(loop, faces, labels, copies) for name, loop in lines.items()}
 
-    positions = vertices
-    if rest is not None:
-        _, nearest = _nearest_vertices(template_vertices, positions)
-        positions = np.linalg.solve(rest.linear[nearest], (positions - rest.offset[nearest])[..., None])[..., 0]
+    positions = vertices if rest is None else rest.rest(vertices, _nearest_vertices(template_vertices, vertices)[1])
     outside = out_of_body(positions, faces, surface)
     moved = np.linalg.norm(outside - positions, axis=1)
     return replace(template, vertices=outside[source].astype(np.float32), faces=new_faces.astype(np.int32),

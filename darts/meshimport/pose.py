@@ -35,9 +35,11 @@ class LoweredArms:
     linear: np.ndarray
     offset: np.ndarray
 
-    def rest(self, vertices: np.ndarray) -> np.ndarray:
-        """Posed DART vertices [V,3] (the template's, moved) back in the rest pose."""
-        return np.linalg.solve(self.linear, (np.asarray(vertices, np.float64) - self.offset)[..., None])[..., 0]
+    def rest(self, vertices: np.ndarray, bound_to: np.ndarray | None = None) -> np.ndarray:
+        """Posed points [N,3] back in the rest pose: the template's vertices (moved), or with
+        ``bound_to`` [N] any points, each by the transform of the template vertex it names."""
+        linear, offset = (self.linear, self.offset) if bound_to is None else (self.linear[bound_to], self.offset[bound_to])
+        return np.linalg.solve(linear, (np.asarray(vertices, np.float64) - offset)[..., None])[..., 0]
 
 
 def lower_arms(template, body, degrees: float) -> LoweredArms:
