@@ -188,14 +188,6 @@ def main() -> None:
         done = args.work / f"g{k:02d}.json"
         if done.exists() and json.loads(done.read_text())["recipe"] == draw:
             row = json.loads(done.read_text())["row"]
-            if "own_mesh" not in row:  # measured before --own-mesh existed: that import alone
-                from darts.dart.io import load_dart
-
-                stem = args.work / f"g{k:02d}-{draw['category']}"
-                row["own_mesh"] = import_and_measure(stem.with_suffix(f".{draw['format']}"),
-                                                     load_dart(stem.with_suffix(".original.npz")),
-                                                     stem.with_name(stem.name + "-own"), args.seed, own_mesh=True)
-                done.write_text(json.dumps({"recipe": draw, "row": row}))
         else:
             row = run_one(draw, args.work, args.seed)
             done.write_text(json.dumps({"recipe": draw, "row": row}))

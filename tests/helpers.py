@@ -153,14 +153,15 @@ CREASE_DEGREES = 30.0
 
 def isotropic_remesh(dart: Dart, factor: float) -> tuple[np.ndarray, np.ndarray]:
     """The welded surface of ``dart`` (its panels joined at the seams) remeshed isotropically to
-    ``factor`` times its mean edge (gpytoolbox's ``remesh_botsch``, Botsch & Kobbelt 2004, 10
-    rounds; the openings kept, and the vertices of creases sharper than ``CREASE_DEGREES`` fixed,
-    as a remesher that keeps features does: without them a collar folded over the shirt collapsed
-    onto it, p95 25 mm): (vertices [N,3], faces [F,3]), another triangulation of the surface."""
-    import gpytoolbox
+    ``factor`` times its mean edge (``darts.geometry.remesh.remesh``: gpytoolbox's ``remesh_botsch``,
+    Botsch & Kobbelt 2004, 10 rounds; the openings kept, and the vertices of creases sharper than
+    ``CREASE_DEGREES`` fixed, as a remesher that keeps features does: without them a collar folded
+    over the shirt collapsed onto it, p95 25 mm): (vertices [N,3], faces [F,3]), another
+    triangulation of the surface."""
     import trimesh
 
     from darts.dart.model import welded
+    from darts.geometry.remesh import remesh
 
     vertices, faces, _ = welded(dart)
     vertices = np.asarray(vertices, np.float64)
@@ -168,8 +169,7 @@ def isotropic_remesh(dart: Dart, factor: float) -> tuple[np.ndarray, np.ndarray]
     mean_edge = float(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1).mean())
     surface = trimesh.Trimesh(vertices, faces, process=False)
     creases = np.unique(surface.face_adjacency_edges[surface.face_adjacency_angles > np.radians(CREASE_DEGREES)])
-    return gpytoolbox.remesh_botsch(vertices, np.asarray(faces, np.int32), i=10, h=factor * mean_edge,
-                                    feature=creases.astype(np.int32))
+    return remesh(vertices, faces, factor * mean_edge, fixed=creases)
 
 
 def _surface_samples(vertices: np.ndarray, faces: np.ndarray, count: int, seed: int) -> np.ndarray:

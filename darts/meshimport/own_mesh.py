@@ -2,11 +2,12 @@
 it its panels, seams, seam regimes, material and feature-line names; the surface, its triangles
 and whatever the template lacks (a collar, a pocket, a ruffle) are the file's.
 
-1. **Panels**: each mesh triangle takes the panel of the registered template's face closest to its
-   centroid; ``SMOOTHING_ROUNDS`` rounds of a majority vote over each triangle and its edge
-   neighbours straighten the borders, and a patch of one panel under ``MIN_PATCH`` triangles is
-   given to the panel around it. A detail the template lacks lies nearest the panel it is
-   attached to, and becomes part of it.
+1. **Panels**: each mesh vertex is nearest one panel of the registered template; the borders
+   between panels are where a point is as near one as the other, which on the template's surface
+   are its seams. The mesh is cut exactly along them (``darts.meshimport.panel_cut``: triangles
+   split where a border crosses them, a vertex next to a border moved onto it), not along its own
+   edges, so a seam runs where the template's does and not half a triangle either side. A detail
+   the template lacks lies nearest the panel it is attached to, and becomes part of it.
 2. **Cut**: a vertex on a border between k panels becomes k vertices, one per panel; every two of
    them are a seam pair, on the seam of the nearest template pair between the same two panels
    (two panels may share several seams: the shoulders and the sides), at that pair's position
@@ -30,49 +31,16 @@ import numpy as np
 
 from darts.dart.model import Dart, Seam
 
-#: Rounds of the majority vote over each triangle's edge neighbours.
-SMOOTHING_ROUNDS = 3
-#: A connected patch of one panel with fewer triangles joins the panel around it.
-MIN_PATCH = 30
 
+def _panel_distances(template: Dart, points: np.ndarray) -> np.ndarray:
+    """[N,P] each point's unsigned distance to each panel of ``template`` (its own faces)."""
+    from darts.geometry.distance import SurfaceDistance
 
-def _edge_neighbours(faces: np.ndarray) -> np.ndarray:
-    """[F,3] the triangle across each edge k (corner k to k + 1) of each triangle (-1 on an opening)."""
-    from darts.geometry.mesh import half_edges, interior_edge_halves
-
-    first, second = interior_edge_halves(half_edges(faces)[2])
-    neighbours = np.full(3 * len(faces), -1)
-    neighbours[first], neighbours[second] = second // 3, first // 3
-    return neighbours.reshape(-1, 3)
-
-
-def _smoothed(labels: np.ndarray, neighbours: np.ndarray, count: int) -> np.ndarray:
-    """``labels`` [F] after ``SMOOTHING_ROUNDS`` majority votes over each triangle and its
-    neighbours (ties keep the triangle's own), then small patches merged (module docstring)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    labels = labels.copy()
-    for _ in range(SMOOTHING_ROUNDS):
-        votes = np.zeros((len(labels), count), np.int64)
-        np.add.at(votes, (np.arange(len(labels)), labels), 2)  # its own vote breaks ties
-        for k in range(3):
-            there = neighbours[:, k] >= 0
-            np.add.at(votes, (np.flatnonzero(there), labels[neighbours[there, k]]), 1)
-        labels = votes.argmax(1)
-    rows = np.repeat(np.arange(len(labels)), 3)
-    columns = neighbours.reshape(-1)
-    keep = (columns >= 0) & (labels[rows] == labels[np.maximum(columns, 0)])
-    graph = coo_matrix((np.ones(keep.sum()), (rows[keep], columns[keep])), shape=(len(labels),) * 2)
-    _, patch = connected_components(graph, directed=False)
-    sizes = np.bincount(patch)
-    for small in np.flatnonzero(sizes < MIN_PATCH):
-        members = np.flatnonzero(patch == small)
-        around = labels[neighbours[members][neighbours[members] >= 0]]
-        around = around[around != labels[members[0]]]
-        if len(around):
-            labels[members] = np.bincount(around, minlength=count).argmax()
-    return labels
+    template_vertices = np.asarray(template.vertices, np.float64)
+    panels = np.asarray(template.panel)
+    faces = np.asarray(template.faces)
+    return np.stack([np.abs(SurfaceDistance(template_vertices, faces[panels == p]).query(points, winding=False)[0])
+                     for p in range(len(template.panel_names))], 1)
 
 
 def _vertex_panels(dart: Dart) -> np.ndarray:
@@ -105,14 +73,11 @@ def dart_from_mesh(template: Dart, vertices: np.ndarray, faces: np.ndarray, line
     indices), with ``rest`` (``darts.meshimport.pose.LoweredArms``, or None at rest) taking it back
     to the rest pose, and there moved out of the body (``out_of_body``; ``surface``: the body at
     rest, a ``FitSurface``) (module docstring)."""
-    from darts.geometry.distance import SurfaceDistance
+    from darts.meshimport.panel_cut import cut_along_panels
 
-    faces = np.asarray(faces, np.int64)
-    vertices = np.asarray(vertices, np.float64)
     template_vertices = np.asarray(template.vertices, np.float64)
-    closest, _ = SurfaceDistance(template_vertices, template.faces).closest_faces(vertices[faces].mean(1))
-    labels = np.asarray(template.panel)[np.maximum(closest, 0)]
-    labels = _smoothed(labels, _edge_neighbours(faces), len(template.panel_names))
+    vertices = np.asarray(vertices, np.float64)
+    vertices, faces, labels, lines = cut_along_panels(vertices, faces, _panel_distances(template, vertices), lines)
 
     # the cut: one copy of each vertex per panel it touches
     keys = np.stack([faces.reshape(-1), np.repeat(labels, 3)], 1)

@@ -146,7 +146,8 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
         say(f"registering the {category} template onto the mesh" + (f", arms lowered {lowered.degrees:g} deg"
                                                                      if lowered.degrees else ""))
         placed = apply_matrix(alignment.matrix, vertices)
-        dart, fit, distances = register_template(lowered.template, body, placed, faces, alignment.lines, surface)
+        targets = {name: loop for name, loop in alignment.lines.items() if name not in alignment.folded}
+        dart, fit, distances = register_template(lowered.template, body, placed, faces, targets, surface)
         registered.append((fit["dart_to_mesh"]["mean_mm"] + fit["mesh_to_dart"]["mean_mm"], alignment, lowered, placed,
                            dart, fit, distances))
     _, alignment, lowered, placed, posed, fit, distances = min(registered, key=lambda r: r[0])
@@ -162,8 +163,10 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
               "transform": transform.tolist(), "scale": alignment.scale,
               "estimated_scale": alignment.estimated_scale,
               "placement": "--transform" if options.transform is not None else "aligned to the template's openings",
-              "placement_distance_mm": 1e3 * alignment.distance, "arms_lowered_degrees": lowered.degrees,
-              "notes": notes,
+              "placement_distance_mm": 1e3 * alignment.distance, "folded_lines": list(alignment.folded),
+              "arms_lowered_degrees": lowered.degrees,
+              "notes": notes + [f"the {name} opening lies on the garment's own surface (a collar's edge?): the surface "
+                                "alone placed the garment and registered the template there" for name in alignment.folded],
               "mesh": {"vertices": len(vertices), "faces": len(faces), "openings": len(loops)},
               "dart_surface": "the file's mesh" if options.own_mesh else "the registered template", **fit}
     return ImportResult(dart, report, placed, faces, template=template, distances=distances)
