@@ -120,7 +120,7 @@ def import_mesh(args) -> int:
     places = ", ".join(f"{100 * p['share']:.0f} % over the {p['body_part'].replace('_', ' ')}" for p in far["worst_body_parts"])
     print(f"the mesh's farthest 5 % from the {fitted} ({far['p95_mm']:.1f} mm and beyond, up to {far['max_mm']:.1f} mm): "
           f"{places}; nearest {fitted} panel {far['worst'][0]['panel']}")
-    for note in report["notes"]:
+    for note in [] if quiet else report["notes"]:
         print(f"note: {note}")
     if not args.own_mesh and far["p95_mm"] > OWN_MESH_HINT_MM:
         print(f"over 5 % of the mesh lies more than {OWN_MESH_HINT_MM:g} mm from the template (a collar, a pocket, a shape "

@@ -21,7 +21,8 @@ two or three). Then:
    it before any of this.
 
 The new vertices lie on the mesh's triangles (on its edges, or inside one triangle): the surface is
-the mesh's, only triangulated along the borders. Openings given as vertex loops get the new
+the mesh's, only triangulated along the borders. (``darts.geometry.levelset`` inserts the zero set
+of one field, for a template's seams one at a time; here every border of P panels at once.) Openings given as vertex loops get the new
 vertices of their split edges.
 """
 from __future__ import annotations

@@ -26,6 +26,7 @@ from darts.crdl.fit import FitSurface
 from darts.crdl.layer import Crdl, CrdlWeights
 from darts.dart.model import Dart
 from darts.geometry.distance import SurfaceDistance
+from darts.geometry.loops import closest_on_loop
 
 #: Multipliers (of the handle weight) of the closest-point pull, one CRDL solve per round.
 STIFFNESS_SCHEDULE = (0.0, 0.002, 0.01, 0.03, 0.1, 0.3, 0.3)
@@ -33,15 +34,6 @@ STIFFNESS_SCHEDULE = (0.0, 0.002, 0.01, 0.03, 0.1, 0.3, 0.3)
 CLEARANCE = CrdlWeights().margin
 #: Local-global iterations per round.
 ROUND_ITERATIONS = 60
-
-
-def _polyline_distance(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
-    """Distance (metres) of each point [N,3] to the closed polyline ``loop`` [K,3]."""
-    a, b = loop, np.roll(loop, -1, 0)
-    ab = b - a
-    t = np.clip(((points[:, None] - a[None]) * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0, 1)
-    nearest = a[None] + t[..., None] * ab[None]
-    return np.linalg.norm(points[:, None] - nearest, axis=-1).min(1)
 
 
 #: How many places a direction's ``worst`` lists.
@@ -115,7 +107,7 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     vertex_panel = np.zeros(count, np.int64)
     vertex_panel[garment.faces.reshape(-1)] = np.repeat(template.panel, 3)  # welded faces keep the DART's order
     nearest_face, _ = registered.closest_faces(vertices)
-    residuals = {name: distance_stats(_polyline_distance(points[garment.lines[name]], vertices[loop]))
+    residuals = {name: distance_stats(closest_on_loop(points[garment.lines[name]], vertices[loop])[0])
                  for name, loop in lines.items()}
     names = list(template.panel_names)
     body_face, _ = surface.body.closest_faces(vertices)
