@@ -28,15 +28,15 @@ def _quality(vertices, faces):
 
 
 def test_two_panels_are_cut_along_their_border_not_along_the_edges():
-    """A slanted border (x + 0.3 y = 0.55) across a grid: every triangle lies on one side, the
+    """A slanted border (x + 0.3 y = 0.52) across a grid: every triangle lies on one side, the
     border's vertices on the line, the area and the opening kept, no sliver cut off."""
     vertices, faces = _grid()
-    side = (vertices[:, 0] + 0.3 * vertices[:, 1] - 0.55) / np.hypot(1, 0.3)  # signed distance to the border
+    side = (vertices[:, 0] + 0.3 * vertices[:, 1] - 0.52) / np.hypot(1, 0.3)  # signed distance to the border
     distances = np.stack([np.maximum(side, 0), np.maximum(-side, 0)], 1)
     loop = boundary_loops(faces)[0]
     points, cut_faces, panels, loops = cut_along_panels(vertices, faces, distances, {"rim": loop})
     assert set(panels.tolist()) == {0, 1} and len(cut_faces) > len(faces)
-    signed = (points[:, 0] + 0.3 * points[:, 1] - 0.55) / np.hypot(1, 0.3)
+    signed = (points[:, 0] + 0.3 * points[:, 1] - 0.52) / np.hypot(1, 0.3)
     assert np.all(signed[cut_faces[panels == 0]] <= 1e-9) and np.all(signed[cut_faces[panels == 1]] >= -1e-9)
     both = np.intersect1d(cut_faces[panels == 0], cut_faces[panels == 1])
     assert len(both) >= 10 and np.abs(signed[both]).max() < 1e-9  # the border's vertices lie on it
@@ -47,6 +47,8 @@ def test_two_panels_are_cut_along_their_border_not_along_the_edges():
     rim = loops["rim"]  # the opening passes through the border's two new points on it
     assert len(rim) > len(loop) and np.sum(np.abs(signed[rim]) < 1e-9) == 2
     assert set(boundary_loops(cut_faces)[0].tolist()) == set(rim.tolist())
+    outline = points[rim]  # still the square's: a vertex on the opening moved only along it
+    assert (np.isclose(outline[:, :2], 0) | np.isclose(outline[:, :2], 1)).any(1).all()
 
 
 def test_three_panels_meet_at_one_point_and_a_mesh_on_the_borders_is_not_cut():

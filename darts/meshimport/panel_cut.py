@@ -10,7 +10,8 @@ two or three). Then:
 1. **Snapped**: an edge (u, w) whose ends share no allowed panel crosses a border at
    t = phi(u) / (phi(u) - phi(w)) along it (phi linear along the edge). Where t < ``SNAP`` of the
    way from u, and every neighbour of u lies in the same two panels, u moves there (along the edge:
-   it stays on the mesh's surface) and becomes a border vertex of both, so no sliver is cut off.
+   it stays on the mesh's surface; a vertex on an opening only along the opening) and becomes a
+   border vertex of both, so no sliver is cut off.
 2. **Split**: every edge whose ends still share no allowed panel gets a new vertex at its crossing
    (at least ``MARGIN`` of the edge from either end);
    a triangle with one or two split edges is cut along the segment joining its border points into
@@ -21,9 +22,9 @@ two or three). Then:
    it before any of this.
 
 The new vertices lie on the mesh's triangles (on its edges, or inside one triangle): the surface is
-the mesh's, only triangulated along the borders. (``darts.geometry.levelset`` inserts the zero set
-of one field, for a template's seams one at a time; here every border of P panels at once.) Openings given as vertex loops get the new
-vertices of their split edges.
+the mesh's, only triangulated along the borders. Openings given as vertex loops get the new
+vertices of their split edges. (``darts.geometry.levelset`` inserts the zero set of one field, for
+a template's seams one at a time; here every border of P panels at once.)
 """
 from __future__ import annotations
 
@@ -66,9 +67,15 @@ def _merge_small_patches(labels: np.ndarray, distances: np.ndarray, edges: np.nd
     return distances
 
 
-def _snap(vertices: np.ndarray, distances: np.ndarray, allowed: list[set], edges: np.ndarray,
+def _snap(vertices: np.ndarray, faces: np.ndarray, distances: np.ndarray, allowed: list[set], edges: np.ndarray,
           neighbours: list[list[int]]) -> np.ndarray:
-    """``vertices`` with the ends close to a crossing moved onto it (``allowed`` updated in place)."""
+    """``vertices`` with the ends close to a crossing moved onto it (``allowed`` updated in place);
+    a vertex on an opening moves only along the opening, which keeps its outline."""
+    from darts.geometry.mesh import boundary_edges
+
+    rim_edges = {tuple(sorted(edge)) for edge in boundary_edges(faces).tolist()}
+    on_rim = np.zeros(len(vertices), bool)
+    on_rim[np.asarray(list(rim_edges), np.int64).reshape(-1)] = True
     labels = distances.argmin(1)
     crossing = np.array([not (allowed[u] & allowed[w]) for u, w in edges.tolist()], bool)
     candidates = []
@@ -82,6 +89,8 @@ def _snap(vertices: np.ndarray, distances: np.ndarray, allowed: list[set], edges
         if t >= SNAP:
             break
         if len(allowed[u]) > 1 or len(allowed[w]) > 1 or not all(allowed[n] <= {a, b} for n in neighbours[u]):
+            continue
+        if on_rim[u] and (min(u, w), max(u, w)) not in rim_edges:
             continue
         vertices[u] = vertices[u] + t * (vertices[w] - vertices[u])
         allowed[u] = {a, b}
@@ -104,7 +113,7 @@ def cut_along_panels(vertices: np.ndarray, faces: np.ndarray, distances: np.ndar
     for u, w in edges.tolist():
         neighbours[u].append(w)
         neighbours[w].append(u)
-    vertices = _snap(np.asarray(vertices, np.float64), distances, allowed, edges, neighbours)
+    vertices = _snap(np.asarray(vertices, np.float64), faces, distances, allowed, edges, neighbours)
     labels = distances.argmin(1)
     for v, panels in enumerate(allowed):  # a vertex's own panel is its nearest allowed one
         if len(panels) > 1:
