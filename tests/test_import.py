@@ -240,9 +240,9 @@ def test_own_mesh_keeps_a_collar_the_template_lacks(tmp_path, run_darts, run_sim
     assert len(faces) < len(dart.faces) < 1.05 * len(faces)  # the file's triangles, split where a seam crosses
     assert len(dart.panel_names) == 4 and len(dart.pairs) > 100
     measured = round_trip_distances(dart, original)
-    for way in ("imported_to_original", "original_to_imported"):  # the shape is the file's; the placement by
-        # the surface alone (the neckline opening is the collar's edge) is what is off
-        assert measured[way]["mean_mm"] <= 3.0 and measured[way]["p95_mm"] <= 8.0, measured
+    for way in ("imported_to_original", "original_to_imported"):  # the shape is the file's, placed by the
+        # template's neckline on its surface (5.7 mm off on average anchored on the collar's edge)
+        assert measured[way]["mean_mm"] <= 2.0 and measured[way]["p95_mm"] <= 5.0, measured
     from darts.geometry.distance import SurfaceDistance
 
     collar = original.vertices[original.faces[original.panel == original.panel_names.index("collar")]].mean(1)

@@ -17,9 +17,10 @@ template's feature lines are.
    a round waist with their start, in steps of 7.5 deg) and the closest 80 % of the
    surface pairs (a longer hem's pairs lie far, at the template's hem: trimmed ICP). A line whose
    loop lies on the garment's own surface (``folded_over``: a collar's outer edge, which is the
-   mesh's neckline opening) is not an anchor, and the surface alone places the garment: a
-   collared T-shirt 5.7 mm off on average anchored on its collar's edge, 2.4 mm so (a collared
-   long-sleeve shirt 1.7 and 0.8 mm). A top with a
+   mesh's neckline opening) is not paired so; instead the template's line is paired with the
+   closest points of the mesh's surface (``_line_on_surface_pairs``: the neckline where the collar
+   is sewn on). A collared T-shirt anchored on its collar's edge was placed 5.7 mm off on average,
+   by its surface alone 2.4 mm, so 0.6 mm (a collared long-sleeve shirt 1.7, 0.8 and 0.8 mm). A top with a
    hem 4.5 cm and sleeves 7.5 cm longer than the template's: every loop at the loops' weight placed
    it 13 mm too high, this 1 mm; shorts 5.4 cm shorter: 19 mm too low, this 0.2 mm. A skirt
    flared 12 cm wider is still turned 2.6 deg about the vertical and tilted 1.1 deg (7 and 2 deg
@@ -78,8 +79,9 @@ class Alignment:
     """``matrix`` [4,4] (canonical mesh -> on the body), the mesh's loops by line name, the mean
     two-way surface distance (metres) between the placed mesh and the template, the ``scale`` the
     matrix applies and the one the screening's similarity found (``estimated_scale``: how far the
-    units are off), and the anchor lines whose loops are a folded-over edge (``folded_over``),
-    which neither placed it nor register the template."""
+    units are off), and the anchor lines whose loops are a folded-over edge (``folded_over``):
+    placed by the template's line put on the mesh's surface, not by the loop, and left out of the
+    registration's line targets."""
 
     matrix: np.ndarray
     lines: dict[str, np.ndarray]
@@ -167,6 +169,15 @@ def _closest_line_pairs(vertices, lines, template_vertices, template_lines) -> t
     return np.concatenate(sources), np.concatenate(targets)
 
 
+def _line_on_surface_pairs(vertices, faces, names, template_vertices, template_lines) -> tuple[np.ndarray, np.ndarray]:
+    """The points of the mesh's surface (``vertices``, ``faces``) closest to the template's lines
+    ``names``, and those line points: for a line whose loop is folded over (a collar's edge), the
+    template's neckline is put on the mesh's surface, where the collar is sewn on."""
+    line_points = np.concatenate([template_vertices[template_lines[name]] for name in names])
+    _, on_surface, _ = SurfaceDistance(vertices, faces).query(line_points, winding=False)
+    return on_surface, line_points
+
+
 def _sample(points: np.ndarray, rng) -> np.ndarray:
     """At most SURFACE_SAMPLES of ``points``, drawn without replacement."""
     return points[rng.choice(len(points), min(SURFACE_SAMPLES, len(points)), replace=False)]
@@ -188,13 +199,15 @@ def _inside_pairs(fit, points: np.ndarray, placed: np.ndarray) -> tuple[np.ndarr
 
 
 def _refine(similarity, turned, turned_sample, lines, template_surface, template_vertices, template_lines, fit,
-            iterations: int, scale_range: tuple[float, float] = SCALE_RANGE, final: bool = False):
+            iterations: int, scale_range: tuple[float, float] = SCALE_RANGE, final: bool = False,
+            folded: tuple[str, ...] = (), faces: np.ndarray | None = None):
     """``iterations`` ICP steps from ``similarity`` (s, R, t) of the turned mesh; every fit is from
     the turned mesh itself, so the scale stays within ``scale_range`` ((1, 1): rigid). The
-    ``final`` steps pair only the ``ANCHOR_LINES`` of the loops given and leave out the surface
-    pairs beyond the ``TRIMMED_SHARE`` percentile of distance (trimmed ICP)."""
+    ``final`` steps pair only the ``ANCHOR_LINES`` of the loops given (and, for the ``folded``
+    ones, the template's line with the mesh's surface, ``faces``) and leave out the surface pairs
+    beyond the ``TRIMMED_SHARE`` percentile of distance (trimmed ICP)."""
     if final:  # lengths and widths are the design: only the line the garment hangs from places it
-        lines = {name: loop for name, loop in lines.items() if name in ANCHOR_LINES}
+        lines = {name: loop for name, loop in lines.items() if name in ANCHOR_LINES and name not in folded}
     s, r, t = similarity
     for step in range(iterations):
         placed = _matrix(s, r, t)
@@ -202,6 +215,10 @@ def _refine(similarity, turned, turned_sample, lines, template_surface, template
         if final:  # each anchor point to the closest point of the template's line: it may slide along it
             loop_source, loop_target = _closest_line_pairs(apply_matrix(placed, turned), lines, template_vertices,
                                                            template_lines)
+            if folded:
+                on_surface, line_points = _line_on_surface_pairs(apply_matrix(placed, turned), faces, folded,
+                                                                 template_vertices, template_lines)
+                loop_source, loop_target = np.r_[loop_source, on_surface], np.r_[loop_target, line_points]
             loop_source = apply_matrix(np.linalg.inv(placed), loop_source)
         elif step % PAIRING_INTERVAL == 0:
             loop_source, loop_target = _loop_pairs(apply_matrix(placed, turned), lines, template_vertices, template_lines)
@@ -248,9 +265,9 @@ def align_to_template(vertices: np.ndarray, faces: np.ndarray, loops: list[np.nd
         screened.append((placement(start, similarity, lines, estimated_scale), start, similarity, turned, turned_sample))
     best, start, similarity, turned, turned_sample = min(screened, key=lambda entry: entry[0].distance)
     folded = _folded_anchors(vertices, faces, best.lines)
-    anchors = {name: loop for name, loop in best.lines.items() if name not in folded}
-    similarity = _refine(similarity, turned, turned_sample, anchors, template_surface, template_vertices,
-                         template_lines, fit, ICP_ITERATIONS - SCREEN_ITERATIONS, scale_range, final=True)
+    similarity = _refine(similarity, turned, turned_sample, best.lines, template_surface, template_vertices,
+                         template_lines, fit, ICP_ITERATIONS - SCREEN_ITERATIONS, scale_range, final=True,
+                         folded=folded, faces=faces)
     return replace(placement(start, similarity, best.lines, best.estimated_scale), folded=folded)
 
 

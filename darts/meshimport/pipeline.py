@@ -165,8 +165,9 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
               "placement": "--transform" if options.transform is not None else "aligned to the template's openings",
               "placement_distance_mm": 1e3 * alignment.distance, "folded_lines": list(alignment.folded),
               "arms_lowered_degrees": lowered.degrees,
-              "notes": notes + [f"the {name} opening lies on the garment's own surface (a collar's edge?): the surface "
-                                "alone placed the garment and registered the template there" for name in alignment.folded],
+              "notes": notes + [f"the {name} opening lies on the garment's own surface (a collar's edge?): placed by the "
+                                "template's line put on its surface, and not a target of the registration"
+                                for name in alignment.folded],
               "mesh": {"vertices": len(vertices), "faces": len(faces), "openings": len(loops)},
               "dart_surface": "the file's mesh" if options.own_mesh else "the registered template", **fit}
     return ImportResult(dart, report, placed, faces, template=template, distances=distances)
