@@ -9,6 +9,11 @@ def directed_edges(faces: np.ndarray) -> np.ndarray:
     return np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
 
 
+def unique_edges(faces: np.ndarray) -> np.ndarray:
+    """[E, 2] every edge once, its ends in increasing order, the edges sorted."""
+    return np.unique(np.sort(directed_edges(faces), axis=1), axis=0)
+
+
 def half_edges(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Face-major half-edges: h = 3f + k runs from faces[f, k] to faces[f, (k + 1) % 3].
     Returns (start vertex [3F], end vertex [3F], key of the undirected edge [3F])."""

@@ -126,7 +126,9 @@ def folded_over(vertices: np.ndarray, faces: np.ndarray, loop: np.ndarray) -> bo
     from scipy.sparse.csgraph import dijkstra
     from scipy.spatial import cKDTree
 
-    edges = np.unique(np.sort(np.asarray(faces)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    from darts.geometry.mesh import unique_edges
+
+    edges = unique_edges(np.asarray(faces))
     lengths = np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)
     graph = coo_matrix((lengths, (edges[:, 0], edges[:, 1])), shape=(len(vertices),) * 2).tocsr()
     far = ~np.isfinite(dijkstra(graph, directed=False, indices=loop, limit=FOLD_GEODESIC, min_only=True))

@@ -30,6 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from darts.geometry.mesh import unique_edges
+
 #: A vertex whose distance to another panel is within this of its nearest (metres) lies on their border.
 TIE = 1e-6
 #: A crossing closer than this share of an edge to one end moves that end onto it instead of cutting.
@@ -39,12 +41,6 @@ SNAP = 0.2
 MARGIN = 0.05
 #: A connected patch of one panel with fewer vertices joins the panel around it.
 MIN_PATCH = 10
-
-
-def _unique_edges(faces: np.ndarray) -> np.ndarray:
-    """[E,2] every edge once, its ends sorted."""
-    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return np.unique(edges, axis=0)
 
 
 def _merge_small_patches(labels: np.ndarray, distances: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -105,7 +101,7 @@ def cut_along_panels(vertices: np.ndarray, faces: np.ndarray, distances: np.ndar
     [N,P] (module docstring). The first N vertices are the mesh's (a few moved along an edge)."""
     faces = np.asarray(faces, np.int64)
     distances = np.asarray(distances, np.float64)
-    edges = _unique_edges(faces)
+    edges = unique_edges(faces)
     distances = _merge_small_patches(distances.argmin(1), distances, edges)
     nearest = distances.min(1, keepdims=True)
     allowed = [set(np.flatnonzero(row).tolist()) for row in distances <= nearest + TIE]

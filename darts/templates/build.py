@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 from darts.body.model import BodyModel
 from darts.errors import DartsInputError
 from darts.geometry.levelset import compact, insert_level_set, keep_side
-from darts.geometry.mesh import boundary_loops, directed_edges, vertex_normals
+from darts.geometry.mesh import boundary_loops, directed_edges, unique_edges, vertex_normals
 from darts.geometry.remesh import remesh
 from darts.geometry.slivers import remove_slivers
 from darts.templates.categories import CATEGORIES, SIDES, Category, seam_fields
@@ -147,7 +147,7 @@ def _insert_seams(vertices, faces, category: Category, lm: Landmarks):
         vertices, faces, values = insert_level_set(vertices, faces, seam.field(vertices), locked=locked)
         locked = np.concatenate([locked, np.zeros(len(vertices) - len(locked), bool)]) | (values == 0)
     seams: dict[str, list] = {}
-    edges = np.unique(np.sort(directed_edges(faces), axis=1), axis=0)
+    edges = unique_edges(faces)
     for seam in fields:
         values = seam.field(vertices)
         scale = np.abs(values).max() + 1e-12
@@ -241,7 +241,7 @@ def _cut_from_body(category: Category, body: BodyModel, body_vertices: np.ndarra
     vertices, faces, hull = _base_surface(category, body_vertices, body.faces, lm, edge_length)
     vertices, faces, seams = _insert_seams(vertices, faces, category, lm)
     vertices = _add_ease(vertices, faces, body_vertices, body.faces, ease)
-    edges = np.unique(np.sort(directed_edges(faces), axis=1), axis=0)
+    edges = unique_edges(faces)
     median = float(np.median(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)))
     vertices, faces, seams, _ = remove_slivers(vertices, faces, seams, MIN_EDGE_FRACTION * median)
     return Template(category.id, vertices, faces, _name_lines(category, vertices, faces), seams, hull, lm)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from darts.dart.model import Dart, merged_index
-from darts.geometry.mesh import half_edges, interior_edge_halves
+from darts.geometry.mesh import half_edges, interior_edge_halves, unique_edges
 
 
 @dataclass
@@ -165,7 +165,7 @@ def cloth_model(dart: Dart) -> ClothModel:
     # A particle whose only faces have no area (two seam ends meeting at a seam's end, say) still
     # needs a mass; it takes the lightest one found elsewhere.
     mass[mass <= 0] = mass[mass > 0].min()
-    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    edges = unique_edges(faces)
     hinges = _hinges(faces)
     seam_of = dart.pair_seam[sprung]
     springs = particle[dart.pairs[sprung]].astype(np.int64)
