@@ -514,6 +514,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "photo-outfits": ("docs/reconstruction.md", photo_outfits),
     "import": ("docs/import.md", imports),
     "import-round-trip": ("docs/import.md", import_round_trip("import_round_trip")),
+    "import-round-trip-held-out": ("docs/import.md", import_round_trip("import_round_trip_s1")),
     "simulation-results": ("docs/simulation.md", simulation_results),
     "seam-regimes": ("docs/simulation.md", seam_regimes),
     "outfits": ("docs/simulation.md", outfits),

@@ -3,7 +3,7 @@ written as another tool would write them, imported back with ``darts import``, a
 the garment they came from.
 
     python scripts/import_round_trip.py [--count 20] [--collars 2] [--seed 0] [--work DIR]
-                                        [--out docs/data/import_round_trip.json]
+                                        [--out docs/data/import_round_trip.json] [--rows FIRST LAST]
 
 Garment k (``--seed`` and k fix every draw; resumable: a garment whose result is under ``--work``,
 default ~/.cache/darts/import-round-trip, is not made again):
@@ -180,12 +180,17 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--work", type=Path, default=Path.home() / ".cache" / "darts" / "import-round-trip")
     parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument("--rows", type=int, nargs=2, metavar=("FIRST", "LAST"),
+                        help="make and measure only garments FIRST..LAST (two runs at once share the work); the table "
+                             "is written when every garment is under --work")
     args = parser.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     rows = []
     for k in range(args.count + args.collars):
         draw = recipe(args.seed, k, args.count, args.collars)
         done = args.work / f"g{k:02d}.json"
+        if args.rows and not args.rows[0] <= k <= args.rows[1]:
+            continue
         if done.exists() and json.loads(done.read_text())["recipe"] == draw:
             row = json.loads(done.read_text())["row"]
         else:
@@ -193,7 +198,8 @@ def main() -> None:
             done.write_text(json.dumps({"recipe": draw, "row": row}))
         rows.append(row)
         print("\n".join(table([row])[2:]), flush=True)
-    args.out.write_text(json.dumps(rows, indent=1) + "\n")
+    if len(rows) == args.count + args.collars:
+        args.out.write_text(json.dumps(rows, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -12,9 +12,7 @@ template's feature lines are.
    again: the placement keeps the garment outside the body.
 3. The start with the smallest mean two-way surface distance after a few steps wins and is refined
    further, from the line it hangs from alone (neckline or waist, at ``ANCHOR_WEIGHT`` a point: a
-   hem or cuff elsewhere than the template's is the user's design; each of its points paired with
-   the closest point of the template's line, free to slide along it, where arc-length pairs turned
-   a round waist with their start, in steps of 7.5 deg) and the closest 80 % of the
+   hem or cuff elsewhere than the template's is the user's design) and the closest 80 % of the
    surface pairs (a longer hem's pairs lie far, at the template's hem: trimmed ICP). A line whose
    loop lies on the garment's own surface (``folded_over``: a collar's outer edge, which is the
    mesh's neckline opening) is not paired so; instead the template's line is paired with the
@@ -23,9 +21,11 @@ template's feature lines are.
    by its surface alone 2.4 mm, so 0.6 mm (a collared long-sleeve shirt 1.7, 0.8 and 0.8 mm). A top with a
    hem 4.5 cm and sleeves 7.5 cm longer than the template's: every loop at the loops' weight placed
    it 13 mm too high, this 1 mm; shorts 5.4 cm shorter: 19 mm too low, this 0.2 mm. A skirt
-   flared 12 cm wider is still turned 2.6 deg about the vertical and tilted 1.1 deg (7 and 2 deg
-   with arc-length anchors: its waist does not fix the turn, and its surface pairs with the
-   narrower template's unevenly).
+   flared 12 cm wider is still turned 7 deg about the vertical and tilted 2 deg (its round waist
+   does not fix the turn, and its surface pairs with the narrower template's unevenly). Pairing
+   each anchor point with the closest point of the template's line instead (free to slide along
+   it) turned that skirt 2.6 deg (4.2 mm off, was 6.5) but placed four other skirts and flared
+   dresses 1-4 mm worse (a long skirt 14 cm wider: 0.11 -> 3.97 mm), so the arc-length pairs stay.
 4. Placement is rigid by default (s = 1, the garment keeps its size: its units are known, and a
    hem, sleeve or width that differs from the template's is the user's design, which a fitted
    scale would undo: a top with sleeves 10 cm shorter was scaled up 8.5 %), or, with
@@ -42,7 +42,7 @@ from scipy.spatial.transform import Rotation
 
 from darts.crdl.targets import correspond
 from darts.geometry.distance import SurfaceDistance
-from darts.geometry.loops import closest_on_loop, resample_loop
+from darts.geometry.loops import resample_loop
 from darts.templates.build import name_loops
 from darts.templates.categories import Category
 
@@ -157,20 +157,6 @@ def _loop_pairs(vertices, lines, template_vertices, template_lines) -> tuple[np.
     return np.concatenate(sources), np.concatenate(targets)
 
 
-def _closest_line_pairs(vertices, lines, template_vertices, template_lines) -> tuple[np.ndarray, np.ndarray]:
-    """Mesh loop points (``LOOP_SAMPLES`` a loop, by arc length) and their closest points on the
-    template's line of the same name: a pairing that fixes where the loop lies, not how it is
-    turned along itself (arc-length pairs, ``_loop_pairs``, turn a round waist by its start, in
-    steps of 360 / ``LOOP_SAMPLES`` degrees)."""
-    if not lines:
-        return np.zeros((0, 3)), np.zeros((0, 3))
-    centre = vertices.mean(0)
-    sources = [resample_loop(vertices[loop], LOOP_SAMPLES, centre) for loop in lines.values()]
-    targets = [closest_on_loop(points, template_vertices[template_lines[name]])[1]
-               for points, name in zip(sources, lines)]
-    return np.concatenate(sources), np.concatenate(targets)
-
-
 def _line_on_surface_pairs(vertices, faces, names, template_vertices, template_lines) -> tuple[np.ndarray, np.ndarray]:
     """The points of the mesh's surface (``vertices``, ``faces``) closest to the template's lines
     ``names``, and those line points: for a line whose loop is folded over (a collar's edge), the
@@ -214,24 +200,23 @@ def _refine(similarity, turned, turned_sample, lines, template_surface, template
     for step in range(iterations):
         placed = _matrix(s, r, t)
         gap, closest, _ = template_surface.query(apply_matrix(placed, turned_sample), winding=False)
-        if final:  # each anchor point to the closest point of the template's line: it may slide along it
-            loop_source, loop_target = _closest_line_pairs(apply_matrix(placed, turned), lines, template_vertices,
-                                                           template_lines)
-            if folded:
-                on_surface, line_points = _line_on_surface_pairs(apply_matrix(placed, turned), faces, folded,
-                                                                 template_vertices, template_lines)
-                loop_source, loop_target = np.r_[loop_source, on_surface], np.r_[loop_target, line_points]
-            loop_source = apply_matrix(np.linalg.inv(placed), loop_source)
-        elif step % PAIRING_INTERVAL == 0:
+        if step % PAIRING_INTERVAL == 0:
             loop_source, loop_target = _loop_pairs(apply_matrix(placed, turned), lines, template_vertices, template_lines)
             loop_source = apply_matrix(np.linalg.inv(placed), loop_source)
+        if folded:  # the template's line on the mesh's surface, re-paired every step
+            on_surface, line_points = _line_on_surface_pairs(apply_matrix(placed, turned), faces, folded,
+                                                             template_vertices, template_lines)
+            pairs_source = np.r_[loop_source, apply_matrix(np.linalg.inv(placed), on_surface)]
+            pairs_target = np.r_[loop_target, line_points]
+        else:
+            pairs_source, pairs_target = loop_source, loop_target
         inside, outside = _inside_pairs(fit, turned_sample, apply_matrix(placed, turned_sample))
         surface_weights = np.ones(len(turned_sample))
         if final:  # what the template lacks (a longer hem or sleeve) pairs far away: left out
             surface_weights[np.abs(gap) > np.percentile(np.abs(gap), TRIMMED_SHARE)] = 0.0
-        weights = np.r_[surface_weights, np.full(len(loop_source), ANCHOR_WEIGHT if final else LOOP_WEIGHT),
+        weights = np.r_[surface_weights, np.full(len(pairs_source), ANCHOR_WEIGHT if final else LOOP_WEIGHT),
                         np.full(len(inside), BODY_WEIGHT)]
-        s, r, t = umeyama(np.r_[turned_sample, loop_source, inside], np.r_[closest, loop_target, outside], weights,
+        s, r, t = umeyama(np.r_[turned_sample, pairs_source, inside], np.r_[closest, pairs_target, outside], weights,
                           scale_range)
     return s, r, t
 
