@@ -42,17 +42,13 @@ def resample_loop(points: np.ndarray, count: int, away_from: np.ndarray) -> np.n
     return (1 - t) * closed[k] + t * closed[k + 1]
 
 
-def closest_on_loop(points: np.ndarray, loop: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(distance [N], closest point [N,3]) of each of ``points`` [N,3] on the closed polyline
-    ``loop`` [K,3]: the nearest of each segment's clamped projections."""
+def distance_to_loop(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """[N] distance of each of ``points`` [N,3] to the closed polyline ``loop`` [K,3]: the nearest
+    of each segment's clamped projections."""
     a, b = loop, np.roll(loop, -1, 0)
     ab = b - a
     t = np.clip(((points[:, None] - a[None]) * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0, 1)
-    nearest = a[None] + t[..., None] * ab[None]
-    distance = np.linalg.norm(points[:, None] - nearest, axis=-1)
-    segment = distance.argmin(1)
-    rows = np.arange(len(points))
-    return distance[rows, segment], nearest[rows, segment]
+    return np.linalg.norm(points[:, None] - (a[None] + t[..., None] * ab[None]), axis=-1).min(1)
 
 
 def feature_lines(dart, vertices: np.ndarray) -> dict[str, np.ndarray]:

@@ -16,10 +16,10 @@ template's feature lines are.
    surface pairs (a longer hem's pairs lie far, at the template's hem: trimmed ICP). A line whose
    loop lies on the garment's own surface (``folded_over``: a collar's outer edge, which is the
    mesh's neckline opening) is not paired so; instead the template's line is paired with the
-   closest points of the mesh's surface (``_line_on_surface_pairs``: the neckline where the collar
-   is sewn on). A collared T-shirt anchored on its collar's edge was placed 5.7 mm off on average,
-   by its surface alone 2.4 mm, so 0.6 mm (a collared long-sleeve shirt 1.7, 0.8 and 0.8 mm). A top with a
-   hem 4.5 cm and sleeves 7.5 cm longer than the template's: every loop at the loops' weight placed
+   closest points of the mesh's surface (the neckline where the collar is sewn on). A collared
+   T-shirt anchored on its collar's edge was placed 5.7 mm off on average, by its surface alone
+   2.4 mm, so 0.6 mm (a collared long-sleeve shirt 1.7, 0.8 and 0.8 mm). A top with a hem 4.5 cm
+   and sleeves 7.5 cm longer than the template's: every loop at the loops' weight placed
    it 13 mm too high, this 1 mm; shorts 5.4 cm shorter: 19 mm too low, this 0.2 mm. A skirt
    flared 12 cm wider is still turned 7 deg about the vertical and tilted 2 deg (its round waist
    does not fix the turn, and its surface pairs with the narrower template's unevenly). Pairing
@@ -157,15 +157,6 @@ def _loop_pairs(vertices, lines, template_vertices, template_lines) -> tuple[np.
     return np.concatenate(sources), np.concatenate(targets)
 
 
-def _line_on_surface_pairs(vertices, faces, names, template_vertices, template_lines) -> tuple[np.ndarray, np.ndarray]:
-    """The points of the mesh's surface (``vertices``, ``faces``) closest to the template's lines
-    ``names``, and those line points: for a line whose loop is folded over (a collar's edge), the
-    template's neckline is put on the mesh's surface, where the collar is sewn on."""
-    line_points = np.concatenate([template_vertices[template_lines[name]] for name in names])
-    _, on_surface, _ = SurfaceDistance(vertices, faces).query(line_points, winding=False)
-    return on_surface, line_points
-
-
 def _sample(points: np.ndarray, rng) -> np.ndarray:
     """At most SURFACE_SAMPLES of ``points``, drawn without replacement."""
     return points[rng.choice(len(points), min(SURFACE_SAMPLES, len(points)), replace=False)]
@@ -196,6 +187,10 @@ def _refine(similarity, turned, turned_sample, lines, template_surface, template
     beyond the ``TRIMMED_SHARE`` percentile of distance (trimmed ICP)."""
     if final:  # lengths and widths are the design: only the line the garment hangs from places it
         lines = {name: loop for name, loop in lines.items() if name in ANCHOR_LINES and name not in folded}
+    # a folded line (a collar's edge): the template's line put on the mesh's surface, where the collar
+    # is sewn on; closest points commute with the placement, so the turned mesh's surface serves
+    line_points = np.concatenate([template_vertices[template_lines[name]] for name in folded] or [np.zeros((0, 3))])
+    folded_surface = SurfaceDistance(turned, faces) if folded else None
     s, r, t = similarity
     for step in range(iterations):
         placed = _matrix(s, r, t)
@@ -203,13 +198,9 @@ def _refine(similarity, turned, turned_sample, lines, template_surface, template
         if step % PAIRING_INTERVAL == 0:
             loop_source, loop_target = _loop_pairs(apply_matrix(placed, turned), lines, template_vertices, template_lines)
             loop_source = apply_matrix(np.linalg.inv(placed), loop_source)
-        if folded:  # the template's line on the mesh's surface, re-paired every step
-            on_surface, line_points = _line_on_surface_pairs(apply_matrix(placed, turned), faces, folded,
-                                                             template_vertices, template_lines)
-            pairs_source = np.r_[loop_source, apply_matrix(np.linalg.inv(placed), on_surface)]
-            pairs_target = np.r_[loop_target, line_points]
-        else:
-            pairs_source, pairs_target = loop_source, loop_target
+        on_mesh = np.zeros((0, 3)) if folded_surface is None else \
+            folded_surface.query(apply_matrix(np.linalg.inv(placed), line_points), winding=False)[1]
+        pairs_source, pairs_target = np.r_[loop_source, on_mesh], np.r_[loop_target, line_points]
         inside, outside = _inside_pairs(fit, turned_sample, apply_matrix(placed, turned_sample))
         surface_weights = np.ones(len(turned_sample))
         if final:  # what the template lacks (a longer hem or sleeve) pairs far away: left out

@@ -26,7 +26,7 @@ from darts.crdl.fit import FitSurface
 from darts.crdl.layer import Crdl, CrdlWeights
 from darts.dart.model import Dart
 from darts.geometry.distance import SurfaceDistance
-from darts.geometry.loops import closest_on_loop
+from darts.geometry.loops import distance_to_loop
 
 #: Multipliers (of the handle weight) of the closest-point pull, one CRDL solve per round.
 STIFFNESS_SCHEDULE = (0.0, 0.002, 0.01, 0.03, 0.1, 0.3, 0.3)
@@ -107,7 +107,7 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     vertex_panel = np.zeros(count, np.int64)
     vertex_panel[garment.faces.reshape(-1)] = np.repeat(template.panel, 3)  # welded faces keep the DART's order
     nearest_face, _ = registered.closest_faces(vertices)
-    residuals = {name: distance_stats(closest_on_loop(points[garment.lines[name]], vertices[loop])[0])
+    residuals = {name: distance_stats(distance_to_loop(points[garment.lines[name]], vertices[loop]))
                  for name, loop in lines.items()}
     names = list(template.panel_names)
     body_face, _ = surface.body.closest_faces(vertices)
