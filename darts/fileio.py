@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from darts.errors import DartsInputError
+from darts.interrupts import raise_if_interrupted
 
 #: The most bytes an input file's contents may take in memory (the arrays of an ``.npz`` together,
 #: a text file): larger is refused before it is allocated. The largest real input, an SMPL-X model,
@@ -80,7 +81,8 @@ class Janitor:
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, keep_suffix: bool = False, janitor: bool = False):
-    """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds.
+    """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds
+    (and no Ctrl-C arrived meanwhile, see ``darts.interrupts``).
     With ``keep_suffix`` the temporary name ends like ``path`` (for writers that go by extension);
     with ``janitor`` a ``Janitor`` removes it if this process is killed meanwhile. Temporaries of
     earlier writers that were killed are removed first."""
@@ -97,6 +99,7 @@ def atomic_path(path: str | os.PathLike, keep_suffix: bool = False, janitor: boo
     try:
         helper = Janitor(tmp) if janitor else None  # inside: a failed start still removes the temporary
         yield Path(tmp)
+        raise_if_interrupted()  # a Ctrl-C a finaliser swallowed still leaves nothing written
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from darts.dart.model import Dart
+from darts.interrupts import raise_if_interrupted
 from sim.body_track import BodyTrack
 from sim.engine.model import ClothModel, cloth_model
 from sim.engine.settings import SimSettings
@@ -91,6 +92,7 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
     previous = None  # the particles at the last frame, settle or recorded
     for k in range(total):
         if k > 0:
+            raise_if_interrupted()
             solver.step_frame(track.vertices[k])
             result.simulated_frames += 1
             bar.update(1)

@@ -6,13 +6,18 @@ import sys
 from collections.abc import Callable
 
 from darts.errors import DartsInputError
+from darts.interrupts import catching_interrupts, raise_if_interrupted
 
 
 def run_guarded(prog: str, main: Callable[[list[str] | None], int], argv: list[str] | None = None) -> int:
     """Run ``main``; a DartsInputError prints ``prog: error: FILE: problem`` and returns 2 instead
-    of a traceback (anything else is a bug and keeps its traceback)."""
+    of a traceback (anything else is a bug and keeps its traceback). Ctrl-C prints ``prog:
+    interrupted`` and returns 130, also when the KeyboardInterrupt was swallowed on the way."""
     try:
-        return main(argv) or 0
+        with catching_interrupts():
+            code = main(argv) or 0
+            raise_if_interrupted()
+            return code
     except DartsInputError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
