@@ -78,7 +78,7 @@ def main() -> None:
 
     def frame_ms() -> float:
         """CPU ms per frame of a default run of the scene, over the frames after the settle."""
-        simulation = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], SimSettings())
+        simulation = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], SimSettings(), track.parts)
         for k in range(1, first):
             simulation.step_frame(track.vertices[k])
         clock.timing = True

@@ -40,7 +40,7 @@ def measure(garments: list[str], frames: int) -> dict:
     dresses = [darts.load_garment(name) for name in garments]
     outfit = outfit_model(dresses, garments, body.shaped()[0][0].double().numpy(), body.faces)
     models = {"outfit": outfit.model, **{name: cloth_model(dart) for name, dart in zip(garments, dresses)}}
-    sims = {name: Simulation(m, track.place_rest(m.rest), track.faces, track.vertices[0], settings)
+    sims = {name: Simulation(m, track.place_rest(m.rest), track.faces, track.vertices[0], settings, track.parts)
             for name, m in models.items()}
     cpu = dict.fromkeys(sims, 0.0)
     for k in range(1, min(frames + 1, len(track.vertices))):

@@ -74,7 +74,7 @@ def garment(size: str, body) -> Path:
 
 def measure(path: Path, track, frames: int, settings: SimSettings) -> dict:
     model = cloth_model(load_dart(path))
-    solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
+    solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings, track.parts)
     solver.step_frame(track.vertices[1])  # compiles the kernels
     with LaunchTimer() as timer:
         start = time.perf_counter()

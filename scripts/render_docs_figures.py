@@ -149,7 +149,7 @@ def seams_figure(out: Path, garment: str, moments: list[tuple[str, float]]) -> N
         frame = int(round(seconds * 30.0))
         track = build_body_track(body, load_motion(MOTIONS_DIR / f"{motion_name}.npz"), 30.0, 0.5)
         keep = track.settle_frames + frame + 1
-        track.vertices, track.pelvis = track.vertices[:keep], track.pelvis[:keep]
+        track.vertices = track.vertices[:keep]
         for col, setting in enumerate(SEAM_SETTINGS):
             dart = load_dart(GARMENTS_DIR / f"{garment}.npz")
             regime, _, stiffness = setting.partition(":")

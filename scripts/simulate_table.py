@@ -43,7 +43,7 @@ def run_one(job: tuple[str, str, str]) -> dict:
     track = build_body_track(load_body(), load_motion(MOTIONS_DIR / f"{motion}.npz"), settings.fps, 0.5)
     if regime != "stiff":
         keep = track.settle_frames + int(REGIME_SECONDS * settings.fps)
-        track.vertices, track.pelvis = track.vertices[:keep], track.pelvis[:keep]
+        track.vertices = track.vertices[:keep]
     result = simulate(dart, track, settings, winding=True)
     stats = summary(result, len(dart.vertices))
     frames = result.frames

@@ -14,6 +14,7 @@ import torch
 
 from darts.body.lbs import axis_angle_to_matrix
 from darts.body.model import BodyModel
+from darts.body.segmentation import body_segmentation
 from darts.errors import DartsInputError
 from darts.motion.amass import Motion
 from darts.motion.budget import check_frames
@@ -32,7 +33,7 @@ class BodyTrack:
     rest_rotation: np.ndarray  # root rotation (3x3) of the rest placement
     rest_origin: np.ndarray  # pelvis joint of the rest shape (canonical frame)
     rest_translation: np.ndarray  # world position of that pelvis joint at t = 0
-    pelvis: np.ndarray | None = None  # world position of the pelvis joint per frame [T,3]
+    parts: np.ndarray | None = None  # [V] each body vertex's part (darts.body.segmentation.PART_NAMES)
 
     @property
     def duration(self) -> float:
@@ -88,10 +89,10 @@ def build_body_track(body: BodyModel, motion: Motion, fps: float, settle: float,
         joined = {name: np.concatenate([getattr(blended, name), arr]) for name, arr in motion.parts().items()}
         motion = motion.with_frames(trans=np.concatenate([blended.trans, motion.trans]), **joined)
     shapes = _shape_blend(start, target, count, motion.num_frames) if reshaping else target
-    vertices, joints = pose_sequence(body, motion, betas=shapes, progress=progress)
+    vertices, _ = pose_sequence(body, motion, betas=shapes, progress=progress)
     _, rest_joints = body.shaped(torch.as_tensor(start, dtype=body.dtype))
     origin = rest_joints[0, 0].double().numpy()
     # In the rest pose every joint moves with the root: x -> R (x - J_0) + J_0 + trans.
     rotation = axis_angle_to_matrix(torch.as_tensor(motion.body_pose[0, 0], dtype=torch.float64)).numpy()
     return BodyTrack(vertices, body.faces, float(fps), count, rotation, origin, origin + motion.trans[0],
-                     joints[:, 0].astype(np.float64))
+                     body_segmentation(body))

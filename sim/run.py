@@ -22,7 +22,7 @@ from sim.engine.model import ClothModel, cloth_model
 from sim.engine.settings import SimSettings
 from sim.engine.simulation import Simulation
 from sim.outfit import Outfit, layer_crossings, layer_order
-from sim.quality import edge_strain, strain_summary, waist_height
+from sim.quality import WaistSlide, edge_strain, strain_summary, waist_slide
 
 
 @dataclass
@@ -53,9 +53,10 @@ def seam_gap_stats(dart: Dart, vertices: np.ndarray) -> dict[str, dict[str, floa
     return stats
 
 
-def _garment_measures(dart: Dart, vertices: np.ndarray, pelvis) -> dict:
-    """One garment's waist height (m above the pelvis, None without a waist line) and seam gaps."""
-    return {"waist_height": waist_height(dart, vertices, pelvis), "seam_gap": seam_gap_stats(dart, vertices)}
+def _garment_measures(dart: Dart, vertices: np.ndarray, body: np.ndarray, slide: WaistSlide | None) -> dict:
+    """One garment's waist slide (m, ``sim.quality.WaistSlide``; None without a waist line) on the
+    body at ``body`` [B,3], and its seam gaps."""
+    return {"waist_slide": None if slide is None else slide(vertices, body), "seam_gap": seam_gap_stats(dart, vertices)}
 
 
 def _layer_strain(model: ClothModel, strain: np.ndarray, layer: int) -> dict[str, float]:
@@ -84,12 +85,13 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
 
     outfit = garments if isinstance(garments, Outfit) else None
     model = outfit.model if outfit is not None else cloth_model(garments)
-    solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings)
+    solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings, track.parts)
     result = RunResult(particles=len(model.rest), settings=solver.settings)
     total = len(track.vertices)
     start = time.perf_counter()
     bar = tqdm(total=total - 1, unit="frame", desc="simulating", disable=not progress, leave=False)
     previous = None  # the particles at the last frame, settle or recorded
+    slides = None  # each garment's WaistSlide (None without a waist line), from the first recorded frame
     for k in range(total):
         if k > 0:
             raise_if_interrupted()
@@ -115,7 +117,10 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
         frame_speed = 0.0 if previous is None else float(np.linalg.norm(particles - previous, axis=1).max()) * settings.fps
         previous = particles
         vertices = particles[model.particle_of_vertex]
-        pelvis = None if track.pelvis is None else track.pelvis[k]
+        body = track.vertices[k]
+        if slides is None:  # the first recorded frame: the settled waistbands are tied to the skin
+            slides = ([waist_slide(garments, vertices, body, track.faces)] if outfit is None else
+                      [waist_slide(dart, part, body, track.faces) for dart, part in zip(outfit.darts, outfit.split(vertices))])
         strain = edge_strain(model, particles)
         frame = {"strain": strain_summary(strain), "penetration": measure.penetration,
                  "penetration_in_body_overlap": measure.penetration_in_body_overlap,
@@ -123,19 +128,16 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
                  "max_speed": measure.max_speed, "max_substep_speed": measure.max_substep_speed,
                  "frame_speed": frame_speed, "self_intersections": measure.self_intersections}
         if outfit is None:
-            frame.update(_garment_measures(garments, vertices, pelvis))
+            frame.update(_garment_measures(garments, vertices, body, slides[0]))
         else:
-            each = {name: {"strain": _layer_strain(model, strain, layer), **_garment_measures(dart, part, pelvis)}
-                    for layer, (name, dart, part) in enumerate(zip(outfit.names, outfit.darts, outfit.split(vertices)))}
-            waists = [g["waist_height"] for g in each.values() if g["waist_height"] is not None]
-            frame.update(waist_height=waists[0] if waists else None, garments=each,
+            each = {name: {"strain": _layer_strain(model, strain, layer), **_garment_measures(dart, part, body, slide)}
+                    for layer, (name, dart, part, slide) in enumerate(zip(outfit.names, outfit.darts,
+                                                                           outfit.split(vertices), slides))}
+            waists = [g["waist_slide"] for g in each.values() if g["waist_slide"] is not None]
+            frame.update(waist_slide=waists[0] if waists else None, garments=each,
                          seam_gap={f"{name}/{seam}": gap for name, g in each.items() for seam, gap in g["seam_gap"].items()},
                          **(_layer_measures(outfit, particles, track, k, winding) if full else
                             {"layers": None, "layers_closed": None, "layer_crossings": None}))
-        waist = frame["waist_height"]
-        if waist is not None:
-            settled = waist if not result.frames else result.frames[0]["waist_height"]
-        frame["waist_slide"] = None if waist is None else settled - waist
         result.frames.append(frame)
         if sink is not None:
             sink(vertices, track.vertices[k])

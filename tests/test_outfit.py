@@ -172,7 +172,7 @@ def test_darts_sim_writes_one_mesh_per_garment_and_the_layer_measures(run_sim, r
     assert 0 <= stats["max_layer_crossings"]["long_sleeve_top x long_pants"] <= stats["max_self_intersections"]
     assert stats["max_penetration"] <= 0.01 and stats["stable"]
     assert "long_pants/waistband" in stats["max_seam_gap"] and "long_sleeve_top/left_side" in stats["max_seam_gap"]
-    assert stats["frames"][0]["garments"]["long_pants"]["waist_height"] is not None
+    assert stats["frames"][0]["garments"]["long_pants"]["waist_slide"] is not None
     # darts render draws the whole outfit: the body and each garment's mesh, every frame
     animation = read_usd_animation(out)
     assert list(animation.faces) == ["body", "long_pants", "long_sleeve_top"] and animation.count == 3

@@ -32,17 +32,40 @@ class BodyContacts:
         self.velocity = wp.zeros(count, dtype=wp.vec3, device=device)
 
 
+#: Body parts a waistband grips (``BodyCollider``'s ``grip``): not an arm or a hand brushing past it.
+GRIP_PARTS = ("upper_torso", "lower_torso", "hips")
+
+
+def gripping_faces(faces: np.ndarray, parts: np.ndarray | None) -> np.ndarray:
+    """[F] float32: 1 for a body face whose three corners lie on ``GRIP_PARTS`` (``parts`` [V], indices
+    into ``darts.body.segmentation.PART_NAMES``), else 0; all 1 without ``parts``."""
+    from darts.body.segmentation import PART_INDEX
+
+    faces = np.asarray(faces).reshape(-1, 3)
+    if parts is None:
+        return np.ones(len(faces), np.float32)
+    on = np.isin(np.asarray(parts), [PART_INDEX[name] for name in GRIP_PARTS])
+    return on[faces].all(1).astype(np.float32)
+
+
 class BodyCollider:
     """The moving body mesh (vertices [V,3], faces [F,3]) and its contacts with ``count`` particles
     of a cloth ``thickness`` (m) thick with Coulomb ``friction``; ``offset`` [count] (m) keeps a
-    particle that much further off the body (an outer layer's, over the layers under it)."""
+    particle that much further off the body (an outer layer's, over the layers under it). ``grip``
+    [count]: each particle's friction where its contact face grips (a waistband's, on the torso and
+    hips: ``gripping_faces`` of the body's ``parts`` [V]; every face without them); the material's
+    ``friction`` elsewhere and on the ground."""
 
     def __init__(self, body_faces: np.ndarray, body_vertices: np.ndarray, count: int, thickness: float,
-                 friction: float, settings: SimSettings, offset: np.ndarray | None = None):
+                 friction: float, settings: SimSettings, offset: np.ndarray | None = None,
+                 grip: np.ndarray | None = None, parts: np.ndarray | None = None):
         device = self.device = settings.device
         self.launch = Launcher(device, settings.replay_launches)
         self.settings, self.count = settings, count
         self.thickness, self.friction_coefficient = float(thickness), float(friction)
+        self.grip = wp.array(np.full(count, friction, np.float32) if grip is None else np.asarray(grip, np.float32),
+                             dtype=float, device=device)
+        self.face_grips = wp.array(gripping_faces(body_faces, parts), dtype=float, device=device)
         self.offset_host = np.zeros(count) if offset is None else np.asarray(offset, np.float64)
         self.offset = wp.array(self.offset_host.astype(np.float32), dtype=float, device=device)
         self.max_offset = float(self.offset_host.max(initial=0.0))
@@ -134,8 +157,9 @@ class BodyCollider:
     def friction(self, x, x_start, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""
         self.launch(collider_kernels.apply_friction, self.count,
-                    [x, x_start, self.contact.normal, self.contact.velocity, self.second.normal,
-                     self.second.face, self.friction_coefficient, dt, self.body_push, self.ground_push])
+                    [x, x_start, self.contact.normal, self.contact.velocity, self.contact.face, self.second.normal,
+                     self.second.face, self.friction_coefficient, self.grip, self.face_grips, dt, self.body_push,
+                     self.ground_push])
 
     def contact_depth(self, particle: int, x: np.ndarray) -> float | None:
         """How far (m) ``particle`` at ``x`` [3] is inside its contact's thickness (None: no contact)."""

@@ -246,16 +246,24 @@ def _coulomb(p: wp.vec3, start: wp.vec3, normal: wp.vec3, crease: wp.vec3, surfa
 @wp.kernel
 def apply_friction(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3),
                    contact_normal: wp.array(dtype=wp.vec3), contact_velocity: wp.array(dtype=wp.vec3),
-                   second_normal: wp.array(dtype=wp.vec3), second_face: wp.array(dtype=wp.int32),
-                   friction: float, dt: float, body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
-    """Coulomb friction once per substep, from the total normal push of the contact sweeps."""
+                   contact_face: wp.array(dtype=wp.int32), second_normal: wp.array(dtype=wp.vec3),
+                   second_face: wp.array(dtype=wp.int32), friction: float, grip: wp.array(dtype=float),
+                   face_grips: wp.array(dtype=float), dt: float, body_push: wp.array(dtype=float),
+                   ground_push: wp.array(dtype=float)):
+    """Coulomb friction once per substep, from the total normal push of the contact sweeps: the
+    material's ``friction``, raised to the particle's ``grip[i]`` (a waistband) where its contact
+    face grips (``face_grips[f]`` 1: the torso and hips; 0: an arm brushing past)."""
     i = wp.tid()
     p = x[i]
     if body_push[i] > 0.0:
         crease = wp.vec3(0.0)
         if second_face[i] >= 0:
             crease = second_normal[i]
-        p = _coulomb(p, x_start[i], contact_normal[i], crease, contact_velocity[i], body_push[i], friction, dt)
+        mu = friction
+        face = contact_face[i]
+        if face >= 0:
+            mu = friction + (grip[i] - friction) * face_grips[face]
+        p = _coulomb(p, x_start[i], contact_normal[i], crease, contact_velocity[i], body_push[i], mu, dt)
     if ground_push[i] > 0.0:
         p = _coulomb(p, x_start[i], wp.vec3(0.0, 0.0, 1.0), wp.vec3(0.0), wp.vec3(0.0), ground_push[i], friction, dt)
     x[i] = p

@@ -23,6 +23,11 @@ import numpy as np
 from darts.dart.model import Dart, merged_index
 from darts.geometry.mesh import half_edges, interior_edge_halves, unique_edges
 
+#: The feature line a skirt or trousers is held up by (its waistband), and how far (m, at rest)
+#: the band's grip reaches into the cloth below it.
+WAIST_LINE = "waist"
+WAISTBAND = 0.03
+
 
 @dataclass
 class ClothModel:
@@ -48,6 +53,25 @@ class ClothModel:
     seam_names: list[str]
     material: dict
     loops: dict = field(default_factory=dict)  # feature line name -> its closed loop of particle indices
+
+    def grip(self, waist: float) -> np.ndarray:
+        """[P] each particle's Coulomb friction against the body where it grips (``BodyCollider``'s
+        ``grip``): the material's μ_m, and on the waistband of a skirt or trousers, where ``waist``
+        > 0, μ = μ_m + (``waist`` - μ_m)(1 - d / w) for a particle a rest distance d < w =
+        ``WAISTBAND`` from the waist line (``WAIST_LINE``; an outfit's ``garment/waist``): an
+        elastic band that grips the skin where woven cloth slides, tapering into the cloth below it
+        (a grip on the line alone shears the row under it)."""
+        from scipy.spatial import cKDTree
+
+        material = float(self.material["friction"])
+        friction = np.full(len(self.rest), material)
+        if waist > 0:
+            for name, loop in self.loops.items():
+                if name.split("/")[-1] == WAIST_LINE:
+                    distance, _ = cKDTree(self.rest[loop]).query(self.rest)
+                    band = distance < WAISTBAND
+                    friction[band] = material + (waist - material) * (1.0 - distance[band] / WAISTBAND)
+        return friction
 
     def springs_and_edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every elastic pair: the edges (the material's stretch stiffness) then the sprung seam

@@ -70,6 +70,9 @@ class SimSettings:
     tethers: bool = _user(
         True, "xpbd: without the long-range tethers (sim.engine.tethers) that hold the garment's length over many edges at "
               "once (it then stretches and waistbands slide unless many more substeps are taken)")
+    waist_friction: float = _user(
+        3.0, "Coulomb friction of a waistband against the body (on the waist line, tapering to the material's 3 cm "
+             "below it): an elastic waistband grips the skin; 0: the material's everywhere")
     # XPBD: the surface tethers' limits times this (never under the rest chord); the graph path they are
     # measured on runs about 2 % over the surface distance, so a little under 1 lets them bind sooner
     tether_scale: float = 1.0
@@ -106,6 +109,7 @@ class SimSettings:
             (0 <= self.gust <= 1, f"gust must be in [0, 1], got {self.gust}"),
             (self.air_density >= 0 and self.drag_coefficient >= 0, "air density and drag must be >= 0"),
             (self.damping >= 0, f"damping must be >= 0, got {self.damping}"),
+            (self.waist_friction >= 0, f"waist friction must be >= 0, got {self.waist_friction}"),
             (self.contact_reach > 0 and self.self_contact_reach > 0 and self.max_speed > 0,
              "contact reaches and max speed must be > 0"),
             (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),

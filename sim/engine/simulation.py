@@ -47,7 +47,7 @@ class Simulation:
     """Steps ``model`` (particles at ``positions`` [P,3], world frame) on a body mesh given frame by frame."""
 
     def __init__(self, model: ClothModel, positions: np.ndarray, body_faces: np.ndarray,
-                 body_vertices: np.ndarray, settings: SimSettings):
+                 body_vertices: np.ndarray, settings: SimSettings, body_parts: np.ndarray | None = None):
         settings = resolved_settings(settings)
         self.model, self.settings = model, settings
         self.device = device = settings.device
@@ -56,7 +56,8 @@ class Simulation:
         self.state = ClothState(positions, device)  # what every substep writes
         self.previous = ClothState(positions, device)  # the state the substep started from
         self.collider = BodyCollider(body_faces, body_vertices, self.count, self.thickness,
-                                     float(model.material["friction"]), settings, model.body_offset)
+                                     float(model.material["friction"]), settings, model.body_offset,
+                                     model.grip(settings.waist_friction), body_parts)
         self.solver = solver_class(settings.solver)(model, self.state, settings)
         # The same body surface with winding-number support, refit only to measure.
         self._winding = wp.Mesh(points=self.collider.points, indices=self.collider.mesh.indices,
