@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from darts.body.model import BodyModel
+from darts.body.segmentation import body_segmentation
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
 from sim.engine.settings import SimSettings
@@ -38,7 +39,7 @@ def rest_track(body: BodyModel, betas, frames: int, fps: float) -> BodyTrack:
     """The body in its rest pose, shaped by ``betas``, standing still for ``frames`` frames."""
     rest = body.shaped(None if betas is None or len(betas) == 0 else np.asarray(betas))[0][0].double().numpy()
     vertices = np.repeat(rest[None].astype(np.float32), frames + 1, axis=0)
-    return BodyTrack(vertices, body.faces, float(fps), 0, np.eye(3), np.zeros(3), np.zeros(3))
+    return BodyTrack(vertices, body.faces, float(fps), 0, np.eye(3), np.zeros(3), np.zeros(3), body_segmentation(body))
 
 
 def drape(dart: Dart, body: BodyModel, family: str, seconds: float = 0.5, fps: float = 30.0) -> Drape:
