@@ -39,11 +39,6 @@ def catching_interrupts():
         _pending = False
 
 
-def interrupted() -> bool:
-    """Whether a SIGINT arrived inside ``catching_interrupts`` (raised or swallowed)."""
-    return _pending
-
-
 def raise_if_interrupted() -> None:
     """Raise KeyboardInterrupt if a SIGINT arrived, even one a finaliser swallowed."""
     if _pending:

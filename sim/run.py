@@ -140,7 +140,7 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
                             {"layers": None, "layers_closed": None, "layer_crossings": None}))
         result.frames.append(frame)
         if sink is not None:
-            sink(vertices, track.vertices[k])
+            sink(vertices, body)
     bar.close()
     result.wall_seconds = time.perf_counter() - start
     return result

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from darts.geometry.mesh import unique_edges
 from darts.geometry.warp_runtime import warp
 from sim.engine.model import cloth_model
 from sim.engine.self_contact import SelfContact
@@ -140,7 +141,7 @@ def _two_sheets(gap: float):
     quads = [(i * 11 + j, i * 11 + j + 1, (i + 1) * 11 + j, (i + 1) * 11 + j + 1) for i in range(10) for j in range(10)]
     sheet = np.array([f for a, b, c, d in quads for f in ((a, b, d), (a, d, c))])
     faces = np.vstack([sheet, sheet + len(grid)])
-    edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    edges = unique_edges(faces)
     positions = np.vstack([grid, grid + [0.0, 0.0, gap]])
     rest = np.vstack([grid, grid + [0.0, 0.0, 1.0]])
     return positions, rest, faces, edges
@@ -185,7 +186,7 @@ def _stacked_sheet(rng) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
     faces = np.array([f for i in range(len(s) - 1) for j in range(n - 1)
                       for f in (((i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1),
                                  (i * n + j, (i + 1) * n + j + 1, i * n + j + 1)))])
-    edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    edges = unique_edges(faces)
     return positions, rest, faces, edges
 
 

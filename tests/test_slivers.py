@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from darts.geometry.levelset import insert_level_set
-from darts.geometry.mesh import boundary_loops, edge_manifold
+from darts.geometry.mesh import boundary_loops, edge_manifold, unique_edges
 from darts.geometry.slivers import remove_slivers
 
 
@@ -32,13 +32,13 @@ def _seamed_grid():
     for _name, axis, value in lines:
         vertices, faces, values = insert_level_set(vertices, faces, vertices[:, axis] - value, locked=locked)
         locked = np.concatenate([locked, np.zeros(len(vertices) - len(locked), bool)]) | (values == 0)
-    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    edges = unique_edges(faces)
     on = {name: np.abs(vertices[:, axis] - value) < 1e-12 for name, axis, value in lines}
     return vertices, faces, {name: edges[on[name][edges].all(1)] for name in on}
 
 
 def _lengths(vertices, faces):
-    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    edges = unique_edges(faces)
     return np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)
 
 

@@ -14,7 +14,7 @@ from darts.dart.model import REGIMES, welded
 from darts.errors import DartsInputError
 from darts.fileio import read_npz, save_npz
 from darts.geometry.distance import SurfaceDistance
-from darts.geometry.mesh import boundary_loops, edge_manifold, loop_length
+from darts.geometry.mesh import boundary_loops, edge_manifold, loop_length, unique_edges
 from darts.templates.categories import CATEGORIES
 
 GARMENTS = Path(__file__).parents[1] / "scenes" / "garments"
@@ -25,7 +25,7 @@ def short_edges_and_lone_seam_corners(dart) -> tuple[int, int]:
     """Edges shorter than 0.3 x the median edge, and seam particles (panel corners on a seam)
     with fewer than three neighbours: what issue 30 asks the builder to leave none of."""
     faces = np.asarray(dart.faces, np.int64)
-    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    edges = unique_edges(faces)
     lengths = np.linalg.norm(dart.vertices[edges[:, 0]] - dart.vertices[edges[:, 1]], axis=1)
     degree = np.bincount(edges.reshape(-1), minlength=len(dart.vertices))
     return int((lengths < 0.3 * np.median(lengths)).sum()), int((degree[np.unique(dart.pairs)] < 3).sum())

@@ -43,6 +43,7 @@ from scipy.spatial.transform import Rotation
 from darts.crdl.targets import correspond
 from darts.geometry.distance import SurfaceDistance
 from darts.geometry.loops import resample_loop
+from darts.geometry.mesh import unique_edges
 from darts.templates.build import name_loops
 from darts.templates.categories import Category
 
@@ -125,8 +126,6 @@ def folded_over(vertices: np.ndarray, faces: np.ndarray, loop: np.ndarray) -> bo
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
     from scipy.spatial import cKDTree
-
-    from darts.geometry.mesh import unique_edges
 
     edges = unique_edges(np.asarray(faces))
     lengths = np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)

@@ -53,18 +53,17 @@ class BodyCollider:
     of a cloth ``thickness`` (m) thick with Coulomb ``friction``; ``offset`` [count] (m) keeps a
     particle that much further off the body (an outer layer's, over the layers under it). ``grip``
     [count]: each particle's friction where its contact face grips (a waistband's, on the torso and
-    hips: ``gripping_faces`` of the body's ``parts`` [V]; every face without them); the material's
-    ``friction`` elsewhere and on the ground."""
+    hips: ``gripping_faces`` of the body's ``parts`` [V]; every face without them; ``ClothModel.grip``);
+    the material's ``friction`` elsewhere and on the ground."""
 
     def __init__(self, body_faces: np.ndarray, body_vertices: np.ndarray, count: int, thickness: float,
-                 friction: float, settings: SimSettings, offset: np.ndarray | None = None,
-                 grip: np.ndarray | None = None, parts: np.ndarray | None = None):
+                 friction: float, grip: np.ndarray, settings: SimSettings, offset: np.ndarray | None = None,
+                 parts: np.ndarray | None = None):
         device = self.device = settings.device
         self.launch = Launcher(device, settings.replay_launches)
         self.settings, self.count = settings, count
         self.thickness, self.friction_coefficient = float(thickness), float(friction)
-        self.grip = wp.array(np.full(count, friction, np.float32) if grip is None else np.asarray(grip, np.float32),
-                             dtype=float, device=device)
+        self.grip = wp.array(np.asarray(grip, np.float32), dtype=float, device=device)
         self.face_grips = wp.array(gripping_faces(body_faces, parts), dtype=float, device=device)
         self.offset_host = np.zeros(count) if offset is None else np.asarray(offset, np.float64)
         self.offset = wp.array(self.offset_host.astype(np.float32), dtype=float, device=device)

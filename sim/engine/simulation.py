@@ -56,8 +56,8 @@ class Simulation:
         self.state = ClothState(positions, device)  # what every substep writes
         self.previous = ClothState(positions, device)  # the state the substep started from
         self.collider = BodyCollider(body_faces, body_vertices, self.count, self.thickness,
-                                     float(model.material["friction"]), settings, model.body_offset,
-                                     model.grip(settings.waist_friction), body_parts)
+                                     float(model.material["friction"]), model.grip(settings.waist_friction),
+                                     settings, model.body_offset, body_parts)
         self.solver = solver_class(settings.solver)(model, self.state, settings)
         # The same body surface with winding-number support, refit only to measure.
         self._winding = wp.Mesh(points=self.collider.points, indices=self.collider.mesh.indices,
