@@ -18,10 +18,10 @@ import os
 import statistics
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from trees import ROOT, run_module, worktree
+
 COMMANDS = {
     "darts --help": ["darts.cli.main", "--help"],
     "darts body info": ["darts.cli.main", "body", "info"],
@@ -32,18 +32,6 @@ COMMANDS = {
     "darts batch --help": ["darts.cli.main", "batch", "--help"],
     "darts-sim --help": ["sim.cli", "--help"],
 }
-
-
-def run_once(module_args: list[str], tree: Path) -> tuple[float, float]:
-    """(CPU seconds, peak MiB) of ``python -m MODULE ARGS`` with ``tree`` first on the path."""
-    env = dict(os.environ, PYTHONPATH=str(tree))
-    child = subprocess.Popen([sys.executable, "-m", *module_args], cwd=tree, env=env,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    _, status, usage = os.wait4(child.pid, 0)
-    child.returncode = os.waitstatus_to_exitcode(status)
-    if child.returncode != 0:
-        raise RuntimeError(f"{' '.join(module_args)} exited {child.returncode} in {tree}")
-    return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0
 
 
 def costliest_imports(module_args: list[str], count: int = 5) -> list[tuple[str, int]]:
@@ -66,18 +54,12 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--out", type=Path, default=Path("docs/data/benchmark_startup.json"))
     args = parser.parse_args()
-    with tempfile.TemporaryDirectory() as tmp:
-        baseline = Path(tmp) / "baseline"
-        subprocess.run(["git", "worktree", "add", "--detach", str(baseline), args.baseline], cwd=ROOT, check=True,
-                       capture_output=True)
-        try:
-            samples = {name: {"now": [], "baseline": []} for name in COMMANDS}
-            for _ in range(args.repeats):
-                for name, module_args in COMMANDS.items():
-                    for which, tree in (("now", ROOT), ("baseline", baseline)):
-                        samples[name][which].append(run_once(module_args, tree))
-        finally:
-            subprocess.run(["git", "worktree", "remove", "--force", str(baseline)], cwd=ROOT, check=True)
+    with worktree(args.baseline) as baseline:
+        samples = {name: {"now": [], "baseline": []} for name in COMMANDS}
+        for _ in range(args.repeats):
+            for name, module_args in COMMANDS.items():
+                for which, tree in (("now", ROOT), ("baseline", baseline)):
+                    samples[name][which].append(run_module(module_args, tree))
     rows = {}
     for name, module_args in COMMANDS.items():
         row = {which: {"cpu_s": statistics.median(s[0] for s in runs), "peak_mib": statistics.median(s[1] for s in runs)}
