@@ -138,3 +138,52 @@ def test_a_skin_skips_the_search_of_particles_riding_the_body_and_keeps_them_on_
     assert np.all(np.abs(height - 1.0) < 0.05) and np.all(np.abs(every - 1.0) < 0.05)
     assert all(q == 121 for q in all_queried)
     assert sum(queried) < 0.2 * sum(all_queried)
+
+
+def _overlapping_slabs() -> trimesh.Trimesh:
+    """A slab with its top at z = 0 and a second one overlapping it, as one posed body part folds
+    into another: the first one's top is buried inside the second for x > 0.05 m, free for x < 0.05."""
+    lower = trimesh.creation.box(extents=(0.4, 0.2, 0.04), transform=trimesh.transformations.translation_matrix(
+        (0.0, 0.0, -0.02)))
+    upper = trimesh.creation.box(extents=(0.2, 0.2, 0.06), transform=trimesh.transformations.translation_matrix(
+        (0.15, 0.0, 0.0)))
+    return trimesh.util.concatenate([lower, upper])
+
+
+def _settle_on_slab(release: bool) -> tuple[np.ndarray, float, object]:
+    """Two small patches 1 mm above the lower slab's top, one over its free part (x = -0.1) and one
+    where it is buried in the upper slab (x = 0.15); one substep without gravity. The particles'
+    heights (m), the thickness and the solver."""
+    patch = np.array([[0.0, -0.001, 0.001], [0.0, 0.001, 0.001], [0.001, 0.0, 0.001]])
+    vertices = np.concatenate([patch + (-0.1, 0.0, 0.0), patch + (0.15, 0.0, 0.0)])
+    model = cloth_model(sheet_dart(vertices, np.array([[0, 1, 2], [3, 4, 5]])))
+    body = _overlapping_slabs()
+    settings = SimSettings(substeps=1, iterations=1, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
+                           self_contact=False, overlap_release=release)
+    solver = Simulation(model, model.rest, np.asarray(body.faces), np.asarray(body.vertices), settings)
+    assert 0.001 < 0.9 * solver.thickness  # both start within a thickness of the lower slab's top
+    solver.step_frame(np.asarray(body.vertices))
+    return solver.positions()[:, 2], solver.thickness, solver
+
+
+def test_cloth_on_a_face_buried_in_another_part_is_not_pushed_off_it():
+    z, thickness, _ = _settle_on_slab(release=True)
+    assert np.allclose(z[:3], thickness, rtol=0.01)  # the free top: a thickness off it
+    assert np.allclose(z[3:], 0.001, atol=1e-6)  # the buried top: left where it lay
+
+
+def test_without_overlap_release_cloth_is_pushed_off_buried_faces_too():
+    z, thickness, _ = _settle_on_slab(release=False)
+    assert np.allclose(z, thickness, rtol=0.01)
+
+
+def test_penetration_where_the_body_overlaps_itself_is_told_apart():
+    """Particles just under the lower slab's top: under its free part they are plainly inside; under
+    its buried part, inside the body's own overlap."""
+    _, _, solver = _settle_on_slab(release=True)
+    inside = np.array([[-0.1, 0.0, -0.002], [-0.1, 0.01, -0.002], [-0.1, -0.01, -0.002],
+                       [0.15, 0.0, -0.002], [0.15, 0.01, -0.002], [0.16, 0.0, -0.002]])
+    solver.state.x.assign(inside.astype(np.float32))
+    measure = solver.measure()
+    assert measure.penetration == pytest.approx(1.0)
+    assert measure.penetration_in_body_overlap == pytest.approx(0.5)

@@ -134,7 +134,7 @@ class BodyCollider:
                          CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start,
                          settings.contact_skin, self.speed, self.query_time, self.query_offset, self.contact.face,
                          self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
-                         self.second.uv, self.second.local])
+                         self.second.uv, self.second.local, int(settings.overlap_release)])
             self.window_time = started
         c, s = self.contact, self.second
         self.launch(collider_kernels.track_contacts, self.count,

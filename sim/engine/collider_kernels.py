@@ -5,7 +5,7 @@ two (creases), and Coulomb friction against the moving body.
 from __future__ import annotations
 
 from darts.geometry.warp_runtime import warp
-from sim.engine.kernels import inside_body
+from sim.engine.kernels import buried, inside_body
 
 wp = warp()
 
@@ -45,7 +45,7 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
                   query_time: wp.array(dtype=float), query_offset: wp.array(dtype=wp.vec3),
                   contact_face: wp.array(dtype=wp.int32), contact_uv: wp.array(dtype=wp.vec2),
                   contact_local: wp.array(dtype=wp.vec3), second: int, second_face: wp.array(dtype=wp.int32),
-                  second_uv: wp.array(dtype=wp.vec2), second_local: wp.array(dtype=wp.vec3)):
+                  second_uv: wp.array(dtype=wp.vec2), second_local: wp.array(dtype=wp.vec3), release: int):
     """Closest body point within ``reach`` of each particle (face, barycentrics) and the outward
     direction there, stored in the face's own frame so that it turns with the face (face -1: none).
 
@@ -73,7 +73,14 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
     point, turned more than SAME_PLANE away, is its second contact (``second_face``, -1: none),
     stored the same way. That is a crease: two faces of one part meeting at a concave angle, or two
     parts pressed together where the posed body overlaps itself (the belly and a thigh in a squat);
-    one plane alone pushes the particle off one face into the other's thickness or inside it."""
+    one plane alone pushes the particle off one face into the other's thickness or inside it.
+
+    With ``release`` set, a contact (first or second) whose body point is ``buried`` inside another
+    part of the body is dropped: where the posed body overlaps itself (a calf folded into the thigh)
+    no place a thickness off a buried face is outside the body, and keeping each particle off
+    whichever buried face is closest pushed neighbours onto different parts' faces, stretching the
+    cloth across the overlap. The particle then moves with the cloth around it until the overlap
+    opens."""
     i = wp.tid()
     p = x[i]
     if skin > 0.0 and query_time[i] >= 0.0 and second_face[i] < 0:
@@ -112,6 +119,9 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
                 face = hit.face
                 uv = wp.vec2(hit.u, hit.v)
                 out = wp.mesh_eval_face_normal(mesh, face)
+    if release != 0 and face >= 0:
+        if buried(mesh, wp.mesh_eval_position(mesh, face, uv[0], uv[1]), out):
+            face = -1
     contact_face[i] = face
     other = int(-1)
     if face >= 0:
@@ -131,7 +141,7 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
                 gap2 = wp.length(target - c2)
                 if gap2 > 1.0e-6:
                     out2 = near.sign * (target - c2) / gap2
-                if wp.dot(out2, out) < SAME_PLANE:
+                if wp.dot(out2, out) < SAME_PLANE and not (release != 0 and buried(mesh, c2, out2)):
                     other = near.face
                     f1, f2, m = face_frame(mesh, other)
                     second_uv[i] = wp.vec2(near.u, near.v)

@@ -58,6 +58,22 @@ def inside_body(mesh: wp.uint64, p: wp.vec3, reach: float):
     return query.result and query.sign < 0.0
 
 
+#: m a ray from a body surface point looks along its outward direction for the surface of another
+#: body part it lies inside of (deeper than the deepest overlap of two posed parts: a calf folded
+#: into a thigh)
+BURIED_REACH = wp.constant(0.25)
+
+
+@wp.func
+def buried(mesh: wp.uint64, point: wp.vec3, out: wp.vec3):
+    """Is the body surface at ``point`` (outward direction ``out``) inside another part of the body,
+    where the posed body overlaps itself? Then the first surface a ray from it along ``out`` meets is
+    that part's, from behind (one ray; the closest point's sign cannot tell: near a buried face its
+    own face is the closest)."""
+    hit = wp.mesh_query_ray(mesh, point + 1.0e-4 * out, out, BURIED_REACH)
+    return hit.result and hit.sign < 0.0
+
+
 @wp.func
 def angle_of(sine: float, cosine: float):
     """atan2(sine, cosine) (the two scaled alike): where |angle| < 45 degrees (cosine > |sine|: every
@@ -109,8 +125,8 @@ def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, bodies: int, windin
                    finite: wp.array(dtype=wp.int32)):
     """Per frame: particles inside the body (sign by the angle-weighted pseudo-normal at the closest
     point, exact for a closed body that does not intersect itself) in inside[0], those of them whose
-    closest body point lies inside another part of the body (3 mm out along its normal is still
-    inside: the posed body overlaps itself there) in inside[1], the largest speed, any non-finite value.
+    closest body point is ``buried`` inside another part of the body (the posed body overlaps itself
+    there) in inside[1], the largest speed, any non-finite value.
     ``bodies`` 0: only the speed and the finite check (no body query)."""
     i = wp.tid()
     p = x[i]
@@ -124,8 +140,7 @@ def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, bodies: int, windin
     query = wp.mesh_query_point_sign_normal(mesh, p, 10.0)
     if query.result and query.sign < 0.0:
         wp.atomic_add(inside, 0, 1)
-        probe = wp.mesh_eval_position(mesh, query.face, query.u, query.v) + 0.003 * wp.mesh_eval_face_normal(mesh, query.face)
-        if inside_body(mesh, probe, 10.0):
+        if buried(mesh, wp.mesh_eval_position(mesh, query.face, query.u, query.v), wp.mesh_eval_face_normal(mesh, query.face)):
             wp.atomic_add(inside, 1, 1)
     if winding != 0:
         by_winding = wp.mesh_query_point_sign_winding_number(winding_mesh, p, 10.0)

@@ -67,6 +67,10 @@ class SimSettings:
     crease_contacts: bool = _user(
         True, "keep each particle off its closest body face only, not also off a second face within a thickness of "
               "where that push puts it (creases, where the body overlaps itself)", flag="--no-crease", key="crease")
+    overlap_release: bool = _user(
+        True, "keep cloth off body faces buried inside another body part too (where the posed body overlaps "
+              "itself: calves in thighs in a squat), pushing it from one buried face to another",
+        flag="--no-overlap-release", key="overlap_release")
     tethers: bool = _user(
         True, "xpbd: without the long-range tethers (sim.engine.tethers) that hold the garment's length over many edges at "
               "once (it then stretches and waistbands slide unless many more substeps are taken)")
