@@ -79,10 +79,15 @@ def surface_tethers(model: ClothModel, per_particle: int = 3, seed: int = 0, chu
     pairs, limits = [], []
     for start in range(0, n, chunk):
         sources = np.arange(start, min(n, start + chunk))
-        distance = dijkstra(graph, directed=False, indices=sources, limit=1.25 * max(radii))
-        later = np.arange(n)[None, :] > sources[:, None]
+        # the graph is symmetric: searched as directed, the same distances without symmetrising it
+        distance = dijkstra(graph, directed=True, indices=sources, limit=1.25 * max(radii))
+        near_rows, near_cols = np.nonzero(distance < np.inf)  # row-major, as the per-ring selections below
+        later = near_cols > sources[near_rows]
+        near_rows, near_cols = near_rows[later], near_cols[later]
+        near = distance[near_rows, near_cols]
         for r in radii:
-            rows, cols = np.nonzero((distance >= r) & (distance < 1.25 * r) & later)
+            ring = (near >= r) & (near < 1.25 * r)
+            rows, cols = near_rows[ring], near_cols[ring]
             # ``per_particle`` of each source's candidates, drawn by sorting on a random key
             order = np.lexsort((rng.random(len(rows)), rows))
             rows, cols = rows[order], cols[order]
