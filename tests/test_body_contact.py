@@ -187,3 +187,28 @@ def test_penetration_where_the_body_overlaps_itself_is_told_apart():
     measure = solver.measure()
     assert measure.penetration == pytest.approx(1.0)
     assert measure.penetration_in_body_overlap == pytest.approx(0.5)
+
+
+def _covered_while_riding(refresh: int) -> np.ndarray:
+    """A patch resting a thickness above a slab's top while a second slab comes down over it (as a
+    thigh folds over a calf): each particle's contact face afterwards (-1: none)."""
+    body = _overlapping_slabs()
+    resting = np.asarray(body.vertices)
+    raised = resting.copy()
+    raised[8:, 2] += 0.1  # the second slab (the last 8 vertices) 10 cm up: clear of the patch
+    patch = np.array([[0.15, -0.001, 0.0], [0.15, 0.001, 0.0], [0.151, 0.0, 0.0]])
+    model = cloth_model(sheet_dart(patch, np.array([[0, 1, 2]])))
+    settings = SimSettings(substeps=10, iterations=1, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
+                           self_contact=False, contact_refresh_interval=refresh)
+    solver = Simulation(model, model.rest + (0.0, 0.0, 0.002), np.asarray(body.faces), raised, settings)
+    for vertices in (raised, raised, resting, resting, resting):
+        solver.step_frame(vertices)
+    return solver.collider.contact.face.numpy()
+
+
+def test_a_particle_riding_its_contact_is_searched_again_when_another_part_covers_it():
+    """The contact skin searches a particle again only once it slides on its contact; the refresh
+    searches every particle every few substeps, so a slab closing over the patch is noticed: the
+    face under it is buried and let go (without the refresh the patch keeps riding it)."""
+    assert np.all(_covered_while_riding(refresh=10) == -1)
+    assert np.all(_covered_while_riding(refresh=10**6) >= 0)

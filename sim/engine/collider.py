@@ -86,6 +86,7 @@ class BodyCollider:
         self.ground_push = wp.zeros(count, dtype=float, device=device)
         self.speed = settings.max_body_speed
         self.time = 0.0  # s since the run started, at the start of the current frame
+        self.unrefreshed = 0  # substeps since every particle was last searched (the first search takes all)
 
     def set_offset(self, offset: np.ndarray) -> None:
         """Each particle's offset off the body beyond the thickness (m) from now on."""
@@ -118,10 +119,13 @@ class BodyCollider:
         ``contact_interval`` substeps search each particle's closest body point within reach (the
         thickness, ``contact_reach`` and what the fastest body vertex travels until the next search)
         with the continuous test from ``x_start`` (positions at the substep's start) and crease
-        contacts; then put every contact plane where its body face is now."""
+        contacts — the particles that moved by the contact skin since their last search, and every
+        particle each ``contact_refresh_interval`` substeps; then put every contact plane where its
+        body face is now."""
         settings = self.settings
         if self.window_start is None:
             self.window_start = wp.clone(x_start)
+        self.unrefreshed += 1
         interval = settings.contact_interval
         search = substep % interval == 0
         self.place((substep + 1) / settings.substeps, refit=search)
@@ -129,10 +133,14 @@ class BodyCollider:
             reach = (self.thickness + self.max_offset + settings.contact_reach + settings.contact_skin
                      + interval * dt * self.speed)
             started = self.time + substep * dt
+            # every particle, however little it moved, at the first search once the refresh interval is over
+            full = self.unrefreshed >= settings.contact_refresh_interval
+            skin = 0.0 if full else settings.contact_skin
+            self.unrefreshed = 0 if full else self.unrefreshed
             self.launch(collider_kernels.find_contacts, self.count,
                         [self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
                          CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start,
-                         settings.contact_skin, self.speed, self.query_time, self.query_offset, self.contact.face,
+                         skin, self.speed, self.query_time, self.query_offset, self.contact.face,
                          self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
                          self.second.uv, self.second.local, int(settings.overlap_release)])
             self.window_time = started

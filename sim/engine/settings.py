@@ -47,6 +47,9 @@ class SimSettings:
     contact_reach: float = 0.01  # m searched beyond the thickness for body contacts
     contact_interval: int = 1  # substeps between the body's closest-point searches
     contact_skin: float = 0.005  # m a particle moves (relative to its contact) before it is searched again; 0: always
+    # substeps between searches of every particle, moved or not (another body part may have closed over one
+    # riding its contact: the skin alone would not notice)
+    contact_refresh_interval: int = 10
     bending_interval: int = 1  # XPBD: substeps between bending sweeps
     self_contact_interval: int = 4  # substeps between the garment's self-contact searches (narrow phase)
     # substeps between the self-contact broad phases (candidate triangles for the searches until the next)
@@ -117,6 +120,8 @@ class SimSettings:
             (self.contact_reach > 0 and self.self_contact_reach > 0 and self.max_speed > 0,
              "contact reaches and max speed must be > 0"),
             (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),
+            (self.contact_refresh_interval >= 1,
+             f"contact refresh interval must be >= 1 substep, got {self.contact_refresh_interval}"),
             (self.self_contact_broad_interval >= 1,
              f"self-contact broad-phase interval must be >= 1, got {self.self_contact_broad_interval}"),
             (0.9 <= self.tether_scale <= 1, f"tether scale must be in [0.9, 1], got {self.tether_scale}"),
