@@ -212,3 +212,24 @@ def test_a_particle_riding_its_contact_is_searched_again_when_another_part_cover
     face under it is buried and let go (without the refresh the patch keeps riding it)."""
     assert np.all(_covered_while_riding(refresh=10) == -1)
     assert np.all(_covered_while_riding(refresh=10**6) >= 0)
+
+
+def _deep_patch_heights(limit: float, frames: int) -> np.ndarray:
+    """A patch 3 cm deep inside a 10 cm slab (its top at z = 0), one substep of one sweep a frame,
+    no gravity: the particles' heights after ``frames`` frames."""
+    slab = trimesh.creation.box(extents=(0.4, 0.4, 0.1), transform=trimesh.transformations.translation_matrix(
+        (0.0, 0.0, -0.05)))
+    patch = np.array([[0.0, -0.001, -0.03], [0.0, 0.001, -0.03], [0.001, 0.0, -0.03]])
+    model = cloth_model(sheet_dart(patch, np.array([[0, 1, 2]])))
+    settings = SimSettings(substeps=1, iterations=1, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
+                           self_contact=False, contact_push_limit=limit)
+    solver = Simulation(model, model.rest, np.asarray(slab.faces), np.asarray(slab.vertices), settings)
+    for _ in range(frames):
+        solver.step_frame(np.asarray(slab.vertices))
+    return solver.positions()[:, 2]
+
+
+def test_a_particle_deep_in_the_body_comes_out_at_the_push_limit_a_sweep():
+    assert np.allclose(_deep_patch_heights(0.01, 1), -0.02, atol=1e-6)  # 1 cm of the 3.2 cm it needs
+    assert np.all(_deep_patch_heights(0.01, 2) > -0.001)  # out (and moving) after the next sweep
+    assert np.allclose(_deep_patch_heights(1.0, 1), 0.002, atol=1e-6)  # without the limit: in one leap

@@ -208,12 +208,13 @@ def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=w
                      contact_normal: wp.array(dtype=wp.vec3), contact_face: wp.array(dtype=wp.int32),
                      second_point: wp.array(dtype=wp.vec3), second_normal: wp.array(dtype=wp.vec3),
                      second_face: wp.array(dtype=wp.int32),
-                     thickness: float, offset: wp.array(dtype=float), ground: int, ground_height: float,
-                     body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
+                     thickness: float, offset: wp.array(dtype=float), limit: float, ground: int,
+                     ground_height: float, body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
     """Move particles to ``thickness`` + their ``offset`` (an outer layer's, over the layers under
     it) outside the body's tangent plane at their contact, and that of their second contact where
-    they have one (the smallest move clearing both), and ``thickness`` above the ground plane z =
-    ground_height, adding up how far each was pushed."""
+    they have one (the smallest move clearing both), but by at most ``limit`` (m) — a particle
+    found deep inside the body comes out over several sweeps instead of leaping out in one — and
+    ``thickness`` above the ground plane z = ground_height, adding up how far each was pushed."""
     i = wp.tid()
     p = x[i]
     if contact_face[i] >= 0:
@@ -224,6 +225,9 @@ def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=w
         if second_face[i] >= 0:
             move = two_plane_push(d1, n1, off - wp.dot(p - second_point[i], second_normal[i]), second_normal[i])
         push = wp.length(move)
+        if push > limit:
+            move = move * (limit / push)
+            push = limit
         if push > 0.0:
             p = p + move
             body_push[i] = body_push[i] + push

@@ -50,6 +50,9 @@ class SimSettings:
     # substeps between searches of every particle, moved or not (another body part may have closed over one
     # riding its contact: the skin alone would not notice)
     contact_refresh_interval: int = 10
+    # m a body contact moves a particle at most per sweep: one found deep inside (cloth left in the body's
+    # own overlap as it opens) comes out over several sweeps, not at tens of m/s in one
+    contact_push_limit: float = 0.01
     bending_interval: int = 1  # XPBD: substeps between bending sweeps
     self_contact_interval: int = 4  # substeps between the garment's self-contact searches (narrow phase)
     # substeps between the self-contact broad phases (candidate triangles for the searches until the next)
@@ -120,6 +123,7 @@ class SimSettings:
             (self.contact_reach > 0 and self.self_contact_reach > 0 and self.max_speed > 0,
              "contact reaches and max speed must be > 0"),
             (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),
+            (self.contact_push_limit > 0, f"contact push limit must be > 0 m, got {self.contact_push_limit}"),
             (self.contact_refresh_interval >= 1,
              f"contact refresh interval must be >= 1 substep, got {self.contact_refresh_interval}"),
             (self.self_contact_broad_interval >= 1,
