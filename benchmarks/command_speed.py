@@ -20,13 +20,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
-import sys
 import tempfile
 from pathlib import Path
 
-from trees import ROOT, run_module, worktree
+from trees import ROOT, run_module, worktree, write_result
 
 #: Issue 46's measure: the 6k short-sleeve top on the walk.
 SCENES = ("short-sleeve-top:walk",)
@@ -78,10 +76,7 @@ def main() -> None:
                   f"{row['speedup']:.2f}x", flush=True)
             for which in trees:
                 print(f"  {which:8s}", {key: row[which][key] for key in (*QUALITY, "max_seam_gap")}, flush=True)
-    result = {"baseline": args.baseline, "repeats": args.repeats, "python": sys.version.split()[0],
-              "cpus": os.cpu_count(), "scenes": rows}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=1))
+    write_result(args.out, args.baseline, args.repeats, "scenes", rows)
 
 
 if __name__ == "__main__":

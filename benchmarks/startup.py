@@ -13,14 +13,13 @@ not by the wall clock: a shared machine's wall clock swings 2x between identical
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import subprocess
 import sys
 from pathlib import Path
 
-from trees import ROOT, run_module, worktree
+from trees import ROOT, run_module, worktree, write_result
 
 COMMANDS = {
     "darts --help": ["darts.cli.main", "--help"],
@@ -70,10 +69,7 @@ def main() -> None:
         print(f"{name:26s} now {row['now']['cpu_s']:.2f} s CPU {row['now']['peak_mib']:4.0f} MiB   "
               f"baseline {row['baseline']['cpu_s']:.2f} s {row['baseline']['peak_mib']:4.0f} MiB   "
               f"{row['speedup']:.1f}x", flush=True)
-    result = {"baseline": args.baseline, "repeats": args.repeats, "python": sys.version.split()[0],
-              "cpus": os.cpu_count(), "commands": rows}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=1))
+    write_result(args.out, args.baseline, args.repeats, "commands", rows)
 
 
 if __name__ == "__main__":

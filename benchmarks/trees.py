@@ -8,6 +8,7 @@ shared machine's wall clock swings 2x between identical runs.
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import subprocess
 import sys
@@ -42,3 +43,12 @@ def run_module(module_args: list[str], tree: Path) -> tuple[float, float]:
     if code != 0:
         raise RuntimeError(f"{' '.join(module_args)} exited {code} in {tree}")
     return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0
+
+
+def write_result(out: Path, baseline: str, repeats: int, rows_name: str, rows: dict) -> None:
+    """The benchmark's rows as JSON at ``out``, with the baseline revision, the repeats, the Python
+    version and the machine's CPU count."""
+    result = {"baseline": baseline, "repeats": repeats, "python": sys.version.split()[0], "cpus": os.cpu_count(),
+              rows_name: rows}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(result, indent=1))
