@@ -125,6 +125,7 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
         frame = {"strain": strain_summary(strain), "penetration": measure.penetration,
                  "penetration_in_body_overlap": measure.penetration_in_body_overlap,
                  "penetration_winding": measure.penetration_winding,
+                 "penetration_winding_in_body_overlap": measure.penetration_winding_in_body_overlap,
                  "max_speed": measure.max_speed, "max_substep_speed": measure.max_substep_speed,
                  "frame_speed": frame_speed, "self_intersections": measure.self_intersections}
         if outfit is None:
@@ -161,6 +162,9 @@ def summary(result: RunResult, vertices: int) -> dict:
         "max_penetration_outside_body_overlap": max((f["penetration"] - f["penetration_in_body_overlap"] for f in measured),
                                                     default=0.0),
         "max_penetration_winding": max((f["penetration_winding"] for f in measured), default=0.0)
+        if measured and measured[0]["penetration_winding"] is not None else None,
+        "max_penetration_winding_outside_body_overlap": max(
+            (f["penetration_winding"] - f["penetration_winding_in_body_overlap"] for f in measured), default=0.0)
         if measured and measured[0]["penetration_winding"] is not None else None,
         "measured_frames": len(measured),
         "max_speed": max((f["max_speed"] for f in frames), default=0.0),

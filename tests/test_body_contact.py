@@ -233,3 +233,14 @@ def test_a_particle_deep_in_the_body_comes_out_at_the_push_limit_a_sweep():
     assert np.allclose(_deep_patch_heights(0.01, 1), -0.02, atol=1e-6)  # 1 cm of the 3.2 cm it needs
     assert np.all(_deep_patch_heights(0.01, 2) > -0.001)  # out (and moving) after the next sweep
     assert np.allclose(_deep_patch_heights(1.0, 1), 0.002, atol=1e-6)  # without the limit: in one leap
+
+
+def test_the_winding_number_tells_the_body_s_own_overlap_apart():
+    """Inside both slabs (where they overlap) the winding number counts 2; inside one, 1."""
+    _, _, solver = _settle_on_slab(release=True)
+    inside = np.array([[-0.1, 0.0, -0.01], [-0.1, 0.01, -0.01], [0.15, 0.0, 0.01],  # in one slab
+                       [0.15, 0.0, -0.01], [0.15, 0.01, -0.01], [0.16, 0.0, -0.02]])  # in both
+    solver.state.x.assign(inside.astype(np.float32))
+    measure = solver.measure(winding=True)
+    assert measure.penetration_winding == pytest.approx(1.0)
+    assert measure.penetration_winding_in_body_overlap == pytest.approx(0.5)

@@ -126,7 +126,9 @@ def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, bodies: int, windin
     """Per frame: particles inside the body (sign by the angle-weighted pseudo-normal at the closest
     point, exact for a closed body that does not intersect itself) in inside[0], those of them whose
     closest body point is ``buried`` inside another part of the body (the posed body overlaps itself
-    there) in inside[1], the largest speed, any non-finite value.
+    there) in inside[1], inside the body by its winding number in inside[2] (``winding``), those of
+    them it covers twice (winding number > 1.5: inside two parts where the posed body overlaps itself)
+    in inside[3], the largest speed, any non-finite value.
     ``bodies`` 0: only the speed and the finite check (no body query)."""
     i = wp.tid()
     p = x[i]
@@ -146,6 +148,9 @@ def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, bodies: int, windin
         by_winding = wp.mesh_query_point_sign_winding_number(winding_mesh, p, 10.0)
         if by_winding.result and by_winding.sign < 0.0:
             wp.atomic_add(inside, 2, 1)
+            twice = wp.mesh_query_point_sign_winding_number(winding_mesh, p, 10.0, 2.0, 1.5)
+            if twice.result and twice.sign < 0.0:
+                wp.atomic_add(inside, 3, 1)
 
 
 @wp.kernel

@@ -27,9 +27,10 @@ wp = warp()
 class FrameMeasure:
     """Fractions of particles inside the body — by the sign at their closest body point, those of
     them where the posed body overlaps itself (armpits, a deep squat) so that no place outside it
-    exists, and by the body's winding number (inside any part, overlaps included) — the largest
+    exists, and by the body's winding number (inside any part, overlaps included) with those of them
+    inside two parts at once (the winding number over 1.5: the body's own overlap) — the largest
     speed (m/s), whether every value is finite, and how many garment edges pass through a garment
-    triangle. ``penetration_winding`` is None unless asked for (it costs about four times the rest);
+    triangle. The winding measures are None unless asked for (they cost about four times the rest);
     the body's and the crossings' measures are None when only the speeds were asked for.
     ``max_substep_speed``: the largest particle speed of any substep since the frame began (m/s;
     ``max_speed`` is the last substep's)."""
@@ -37,6 +38,7 @@ class FrameMeasure:
     penetration: float | None
     penetration_in_body_overlap: float | None
     penetration_winding: float | None
+    penetration_winding_in_body_overlap: float | None
     max_speed: float
     finite: bool
     self_intersections: int | None
@@ -62,7 +64,7 @@ class Simulation:
         # The same body surface with winding-number support, refit only to measure.
         self._winding = wp.Mesh(points=self.collider.points, indices=self.collider.mesh.indices,
                                 support_winding_number=True)
-        self._inside = wp.zeros(3, dtype=wp.int32, device=device)
+        self._inside = wp.zeros(4, dtype=wp.int32, device=device)
         self._max_speed = wp.zeros(1, dtype=float, device=device)
         self._finite = wp.zeros(1, dtype=wp.int32, device=device)
 
@@ -110,11 +112,12 @@ class Simulation:
         finite = bool(self._finite.numpy()[0])
         speeds = {"max_speed": float(self._max_speed.numpy()[0]), "max_substep_speed": float(self.solver.fastest.numpy()[0])}
         if not bodies:
-            return FrameMeasure(None, None, None, finite=finite, self_intersections=None, **speeds)
+            return FrameMeasure(None, None, None, None, finite=finite, self_intersections=None, **speeds)
         inside = self._inside.numpy() / self.count
         crossings = int(self.solver.self_contact.crossing_edges().sum()) if finite else 0
-        return FrameMeasure(float(inside[0]), float(inside[1]), float(inside[2]) if winding else None, finite=finite,
-                            self_intersections=crossings, **speeds)
+        return FrameMeasure(float(inside[0]), float(inside[1]), float(inside[2]) if winding else None,
+                            float(inside[3]) if winding else None, finite=finite, self_intersections=crossings,
+                            **speeds)
 
     def diagnose(self) -> str:
         """Which particle and constraint a blow-up starts from: the first non-finite particle (else the
