@@ -258,7 +258,7 @@ def test_the_squat_stretches_the_skirt_far_less_than_before_the_overlap_release(
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 46, open: 4.5 % of the skirt lies where the squatting body overlaps "
+@pytest.mark.xfail(strict=True, reason="issue 46, open: 4.4 % of the skirt lies where the squatting body overlaps "
                                        "itself, inside it by the closest point")
 def test_the_squat_keeps_the_skirt_out_of_the_body_by_the_closest_point(body):
     result, _ = _short_skirt_on(body, "squat")
