@@ -134,9 +134,9 @@ class BodyCollider:
                      + interval * dt * self.speed)
             started = self.time + substep * dt
             # every particle, however little it moved, at the first search once the refresh interval is over
-            full = self.unrefreshed >= settings.contact_refresh_interval
-            skin = 0.0 if full else settings.contact_skin
-            self.unrefreshed = 0 if full else self.unrefreshed
+            skin = settings.contact_skin
+            if self.unrefreshed >= settings.contact_refresh_interval:
+                skin, self.unrefreshed = 0.0, 0
             self.launch(collider_kernels.find_contacts, self.count,
                         [self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
                          CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start,
