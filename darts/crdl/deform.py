@@ -46,17 +46,19 @@ def fit_surface(dart: Dart, body: BodyModel) -> FitSurface:
     return FitSurface(shaped[0].double().detach().numpy(), body.faces, hull)
 
 
-def handle_targets(garment: WeldedGarment, targets: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """(handle vertex indices [H], matched target points [H,3]) over every line with a target."""
+def handle_targets(garment: WeldedGarment, targets: dict[str, np.ndarray],
+                   match=correspond) -> tuple[np.ndarray, np.ndarray]:
+    """(handle vertex indices [H], matched target points [H,3]) over every line with a target, each
+    line's vertices matched to its target loop by ``match`` (arc length, ``correspond``, unless told)."""
     import torch
 
     handles, points = [], []
     for name, loop in garment.lines.items():
         if name not in targets:
             continue
-        match = correspond(garment.vertices[loop], targets[name])
+        pairing = match(garment.vertices[loop], targets[name])
         handles.append(loop)
-        points.append(match.points(torch.as_tensor(targets[name])).numpy())
+        points.append(pairing.points(torch.as_tensor(targets[name])).numpy())
     if not handles:
         raise DartsInputError(None, "no target line matches a line of the garment")
     return np.concatenate(handles), np.concatenate(points)

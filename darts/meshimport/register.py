@@ -1,10 +1,11 @@
 """Registering a category template onto an imported garment mesh with the CRDL (non-rigid ICP).
 
 The template (its seams welded) is deformed by the CRDL (``darts.crdl.layer``) with two kinds of
-handle: every feature-line vertex pulled to its arc-length match on the mesh's loop of that name
-(multiplier 1), and every vertex pulled to its closest point on the mesh, moved ``CLEARANCE`` out of the body
-where it lies in or near it (multiplier m_r). Rounds
-r recompute the closest points from the last result, with m_r rising along ``STIFFNESS_SCHEDULE``.
+handle: every feature-line vertex pulled to its match on the mesh's loop of that name, the point
+at its angle about the loop's centre (``darts.crdl.targets.correspond_around``; arc length where
+a loop is not star-shaped about it) (multiplier 1), and every vertex pulled to its closest point
+on the mesh, moved ``CLEARANCE`` out of the body where it lies in or near it (multiplier m_r).
+Rounds r recompute the closest points from the last result, with m_r rising along ``STIFFNESS_SCHEDULE``.
 The first round is the lines alone, solved as ``darts.deform`` solves an edit (``FIRST_ROUND_ITERATIONS``,
 its start raced between the rest shape and the rest shape with the line vertices on their targets):
 the CRDL edit that takes the template's openings to the mesh's, so the panels stretch as the
@@ -29,6 +30,7 @@ from darts.body.segmentation import PART_NAMES, body_segmentation
 from darts.crdl.deform import fit_surface, handle_targets, weld_garment
 from darts.crdl.fit import FitSurface
 from darts.crdl.layer import Crdl, CrdlWeights
+from darts.crdl.targets import correspond_around
 from darts.dart.model import Dart
 from darts.geometry.distance import SurfaceDistance
 from darts.geometry.loops import distance_to_loop
@@ -93,7 +95,8 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     garment = weld_garment(template)
     surface = surface or fit_surface(template, body)
     mesh = SurfaceDistance(vertices, faces)
-    line_handles, line_points = handle_targets(garment, {name: vertices[loop] for name, loop in lines.items()})
+    line_handles, line_points = handle_targets(garment, {name: vertices[loop] for name, loop in lines.items()},
+                                               match=correspond_around)
     line_points = surface.push_out(line_points, CLEARANCE)
     count = len(garment.vertices)
     handles = np.concatenate([line_handles, np.arange(count)])
