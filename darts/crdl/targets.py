@@ -161,7 +161,6 @@ def correspond(template_points: np.ndarray, target: np.ndarray, shifts: int = 25
     return best
 
 
-
 def _around_centre(points: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """The loop's points [K,2] in the plane of ``axes`` [2,3] about its centroid (the enclosed
     area's, by the shoelace formula: an unevenly sampled loop's vertex mean is off its centre) and

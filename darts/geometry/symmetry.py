@@ -35,6 +35,14 @@ class MirrorPlane:
         return points - 2.0 * (points @ self.normal - self.offset)[:, None] * self.normal
 
 
+def plane_axes(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors (a, b) that, with the unit ``normal`` n, make a right-handed orthonormal
+    frame: a = n x Y (n x X where n is near Y), b = n x a."""
+    a = np.cross(normal, [0.0, 1.0, 0.0]) if abs(normal[1]) < 0.9 else np.cross(normal, [1.0, 0.0, 0.0])
+    a /= np.linalg.norm(a)
+    return a, np.cross(normal, a)
+
+
 def mirror_plane(vertices: np.ndarray, faces: np.ndarray, normal: np.ndarray,
                  points: np.ndarray | None = None) -> MirrorPlane:
     """The mirror plane of the surface (``vertices`` [V,3], ``faces`` [F,3]) nearest the one through
@@ -49,15 +57,12 @@ def mirror_plane(vertices: np.ndarray, faces: np.ndarray, normal: np.ndarray,
         reflected = points - 2.0 * height[:, None] * n
         _, closest, surface_normal = surface.query(reflected, winding=False)
         residual = ((reflected - closest) * surface_normal).sum(1)
-        a = np.cross(n, [0.0, 1.0, 0.0]) if abs(n[1]) < 0.9 else np.cross(n, [1.0, 0.0, 0.0])
-        a /= np.linalg.norm(a)
-        b = np.cross(n, a)
+        a, b = plane_axes(n)
         jacobian = np.stack([(-2.0 * ((points @ u)[:, None] * n + height[:, None] * u) * surface_normal).sum(1)
                              for u in (a, b)] + [2.0 * surface_normal @ n], 1)
         step = np.linalg.lstsq(jacobian, -residual, rcond=None)[0]
         n = n + step[0] * a + step[1] * b
         n /= np.linalg.norm(n)
         d += float(step[2])
-    plane = MirrorPlane(n, d, 0.0)
-    gap, _, _ = surface.query(plane.reflect(points), winding=False)
+    gap, _, _ = surface.query(MirrorPlane(n, d, 0.0).reflect(points), winding=False)
     return MirrorPlane(n, d, float(np.abs(gap).mean()))

@@ -52,7 +52,7 @@ from darts.crdl.targets import correspond
 from darts.geometry.distance import SurfaceDistance
 from darts.geometry.loops import resample_loop
 from darts.geometry.mesh import unique_edges
-from darts.geometry.symmetry import MirrorPlane, mirror_plane
+from darts.geometry.symmetry import MirrorPlane, mirror_plane, plane_axes
 from darts.templates.build import name_loops
 from darts.templates.categories import Category
 
@@ -210,9 +210,9 @@ def umeyama_mirrored(source: np.ndarray, target: np.ndarray, weights: np.ndarray
     left to the pairs: an edited garment's plane lies up to 1 mm off its template's)."""
     source_plane, target_plane = mirror
     normal = target_plane.normal
-    turned = source @ _least_turn(source_plane.normal, normal).T
-    across = np.cross(normal, [0.0, 1.0, 0.0]) if abs(normal[1]) < 0.9 else np.cross(normal, [1.0, 0.0, 0.0])
-    basis = np.stack([across / np.linalg.norm(across), np.cross(normal, across / np.linalg.norm(across)), normal])
+    least_turn = _least_turn(source_plane.normal, normal)
+    turned = source @ least_turn.T
+    basis = np.stack([*plane_axes(normal), normal])
     x, y = (turned @ basis.T)[:, :2], (target @ basis.T)[:, :2]
     w = weights / weights.sum()
     xc, yc = x - w @ x, y - w @ y
@@ -222,7 +222,7 @@ def umeyama_mirrored(source: np.ndarray, target: np.ndarray, weights: np.ndarray
     shift = w @ y - scale * in_plane @ (w @ x)
     about_normal = np.eye(3)
     about_normal[:2, :2] = in_plane
-    rotation = basis.T @ about_normal @ basis @ _least_turn(source_plane.normal, normal)
+    rotation = basis.T @ about_normal @ basis @ least_turn
     along = w @ (target @ normal) - scale * (w @ (turned @ normal))
     translation = basis[:2].T @ shift + along * normal
     return scale, rotation, translation
