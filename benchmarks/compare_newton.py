@@ -70,14 +70,15 @@ class Scene:
         self._body.points.assign(self.track.vertices[frame].astype(np.float32))
         self._body.refit()
         xs = wp.array(x.astype(np.float32), dtype=wp.vec3)
-        inside = wp.zeros(3, dtype=wp.int32)
+        inside = wp.zeros((1, 4), dtype=wp.int32)
         speed = wp.zeros(1, dtype=float)
         ok = wp.ones(1, dtype=wp.int32)
         wp.launch(kernels.frame_measures, dim=len(x),
-                  inputs=[self._body.id, self._body.id, 1, 0, xs, wp.zeros_like(xs), inside, speed, ok])
+                  inputs=[self._body.id, self._body.id, 1, 0, xs, wp.zeros_like(xs), wp.zeros(len(x), dtype=wp.int32),
+                          inside, speed, ok])
         springs = self.model.springs
         gap = float(np.linalg.norm(x[springs[:, 0]] - x[springs[:, 1]], axis=1).max()) if len(springs) else 0.0
-        return float(inside.numpy()[0]) / len(x), gap, finite, edge_strain(self.model, x)
+        return float(inside.numpy()[0, 0]) / len(x), gap, finite, edge_strain(self.model, x)
 
 
 def run_ours(scene: Scene, self_contact: bool = True) -> dict:

@@ -61,6 +61,9 @@ class Job:
 #: ``function(job, folder)`` does the job, writing its files into ``folder`` (which exists), and
 #: returns the manifest fields it measured (``status`` defaults to "ok").
 JobFunction = Callable[[Job, Path], dict]
+#: ``function(jobs, folders)`` does several jobs at once (one solver stepping them all), each
+#: writing into its folder, and returns each job's manifest fields, in order.
+GroupFunction = Callable[[list[Job], list[Path]], list[dict]]
 
 
 def safe_id(text: str) -> str:
@@ -75,38 +78,74 @@ def _single_threaded() -> None:
     torch.set_num_threads(1)
 
 
+class _Attempt:
+    """One job's temporary folder beside its final one, its manifest row and its clock."""
+
+    def __init__(self, job: Job, out_dir: Path):
+        self.final = Path(out_dir) / job.path
+        self.work = self.final.parent / f".{job.id}.tmp-{uuid.uuid4().hex[:8]}"
+        self.work.mkdir(parents=True)
+        self.started = time.perf_counter()
+        self.row = {"id": job.id, **job.inputs}
+
+    def publish(self, measured: dict) -> dict:
+        """The job succeeded: its row with what it ``measured``, its folder moved into place."""
+        self.row.update({"status": "ok", "error": ""}, **measured)
+        self.row["wall_seconds"] = round(time.perf_counter() - self.started, 3)
+        (self.work / RESULT).write_text(json.dumps(self.row, indent=1))
+        if self.final.exists():
+            shutil.rmtree(self.final)
+        os.replace(self.work, self.final)
+        return self.row
+
+    def fail(self, exc: Exception) -> dict:
+        """The job failed with ``exc``: its row with the message (a DartsInputError's one line)."""
+        message = str(exc) if isinstance(exc, DartsInputError) else f"{type(exc).__name__}: {exc}"
+        self.row.update(status="failed", error=message.splitlines()[0] if message else type(exc).__name__,
+                        wall_seconds=round(time.perf_counter() - self.started, 3))
+        if not isinstance(exc, DartsInputError):
+            self.row["traceback"] = traceback.format_exc(limit=-3)
+        return self.row
+
+    def clean(self) -> None:
+        if self.work.exists():
+            shutil.rmtree(self.work, ignore_errors=True)
+
+
 def run_one(function: JobFunction, job: Job, out_dir: Path) -> dict:
     """Do ``job`` in a temporary folder and publish it as ``out_dir/<id>/``; the manifest row. Any
     exception is the job's failure, recorded with its message (a DartsInputError's one line)."""
-    out_dir = Path(out_dir)
-    final = out_dir / job.path
-    work = final.parent / f".{job.id}.tmp-{uuid.uuid4().hex[:8]}"
-    work.mkdir(parents=True)
-    started = time.perf_counter()
-    row = {"id": job.id, **job.inputs}
+    attempt = _Attempt(job, out_dir)
     try:
-        measured = function(job, work)
-        row.update({"status": "ok", "error": ""}, **measured)
-        row["wall_seconds"] = round(time.perf_counter() - started, 3)
-        (work / RESULT).write_text(json.dumps(row, indent=1))
-        if final.exists():
-            shutil.rmtree(final)
-        os.replace(work, final)
+        return attempt.publish(function(job, attempt.work))
     except Exception as exc:  # noqa: BLE001 - every failure of a job is recorded, the batch goes on
-        message = str(exc) if isinstance(exc, DartsInputError) else f"{type(exc).__name__}: {exc}"
-        row.update(status="failed", error=message.splitlines()[0] if message else type(exc).__name__,
-                   wall_seconds=round(time.perf_counter() - started, 3))
-        if not isinstance(exc, DartsInputError):
-            row["traceback"] = traceback.format_exc(limit=-3)
+        return attempt.fail(exc)
     finally:
-        if work.exists():
-            shutil.rmtree(work, ignore_errors=True)
-    return row
+        attempt.clean()
 
 
-def _remote_one(function: JobFunction, job: Job, out_dir: str) -> dict:
+def run_group(function: GroupFunction, alone: JobFunction, jobs: list[Job], out_dir: Path) -> list[dict]:
+    """Do ``jobs`` together (``function``), each in its temporary folder, published as ``run_one``
+    does; the manifest rows. Where the group fails as a whole (one bad job refuses the group), each
+    job is done alone (``alone``), so that only a bad job fails."""
+    if len(jobs) == 1:
+        return [run_one(alone, jobs[0], out_dir)]
+    attempts = [_Attempt(job, out_dir) for job in jobs]
+    try:
+        measured = function(jobs, [a.work for a in attempts])
+        return [attempt.publish(fields) for attempt, fields in zip(attempts, measured)]
+    except Exception:  # noqa: BLE001 - one by one, each job's own failure is recorded
+        return [run_one(alone, job, out_dir) for job in jobs]
+    finally:
+        for attempt in attempts:
+            attempt.clean()
+
+
+def _remote_group(function: GroupFunction | None, alone: JobFunction, jobs: list[Job], out_dir: str) -> list[dict]:
     _single_threaded()
-    return run_one(function, job, Path(out_dir))
+    if function is None:
+        return [run_one(alone, job, Path(out_dir)) for job in jobs]
+    return run_group(function, alone, jobs, Path(out_dir))
 
 
 def finished_rows(out_dir: Path, jobs: list[Job]) -> dict[str, dict]:
@@ -203,9 +242,11 @@ def ray_session(address: str | None = None, workers: int | None = None):
 
 def run_jobs(jobs: Iterable[Job], out_dir: str | os.PathLike, function: JobFunction, *, workers: int | None = None,
              address: str | None = None, retry: int = 0, progress: bool = True, session=None,
-             description: str = "jobs") -> list[dict]:
+             description: str = "jobs", group: GroupFunction | None = None, group_size: int = 1) -> list[dict]:
     """Run every unfinished job of ``jobs`` on Ray (``session``, else a ``ray_session(address,
-    workers)`` of its own); the manifest rows of all jobs, in job order."""
+    workers)`` of its own); the manifest rows of all jobs, in job order. With ``group``, the
+    unfinished jobs go to the workers ``group_size`` at a time, each such group done at once by
+    ``group`` (``run_group``)."""
     from tqdm import tqdm
 
     jobs = list(jobs)
@@ -220,29 +261,32 @@ def run_jobs(jobs: Iterable[Job], out_dir: str | os.PathLike, function: JobFunct
     rows.update(finished_rows(out_dir, jobs))
     _write_manifest(manifest, jobs, rows)
     pending = [job for job in jobs if rows.get(job.id, {}).get("status") not in FINISHED]
+    size = max(1, group_size) if group is not None else 1
     bar = tqdm(total=len(jobs), initial=len(jobs) - len(pending), unit="job", desc=description, disable=not progress)
     if pending:
         with contextlib.ExitStack() as stack:
             ray = session or stack.enter_context(ray_session(address, workers))
-            remote = ray.remote(num_cpus=1, max_retries=retry)(_remote_one)
+            remote = ray.remote(num_cpus=1, max_retries=retry)(_remote_group)
             limit = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
-            queue, running = list(reversed(pending)), {}
+            queue = [pending[i:i + size] for i in range(0, len(pending), size)][::-1]
+            running = {}
             with open(manifest, "a") as handle:
                 while queue or running:
                     while queue and len(running) < limit:
-                        job = queue.pop()
-                        running[remote.remote(function, job, str(out_dir.resolve()))] = job
+                        batch = queue.pop()
+                        running[remote.remote(group, function, batch, str(out_dir.resolve()))] = batch
                     done, _ = ray.wait(list(running), num_returns=1)
-                    job = running.pop(done[0])
+                    batch = running.pop(done[0])
                     try:
-                        row = ray.get(done[0])
+                        done_rows = ray.get(done[0])
                     except Exception as exc:  # noqa: BLE001 - the worker died (after its retries)
                         first = str(exc).splitlines()[0] if str(exc) else ""
-                        row = {"id": job.id, **job.inputs, "status": "failed", "wall_seconds": 0.0,
-                               "error": f"worker lost: {type(exc).__name__}: {first}"}
-                    rows[job.id] = row
-                    _append(handle, row)
-                    bar.update(1)
+                        done_rows = [{"id": job.id, **job.inputs, "status": "failed", "wall_seconds": 0.0,
+                                      "error": f"worker lost: {type(exc).__name__}: {first}"} for job in batch]
+                    for row in done_rows:
+                        rows[row["id"]] = row
+                        _append(handle, row)
+                    bar.update(len(done_rows))
                     bar.set_postfix_str(f"{sum(r['status'] == 'failed' for r in rows.values())} failed", refresh=False)
     bar.close()
     # Every job is done: a temporary folder left now is a killed run's, written after the sweep above

@@ -6,4 +6,5 @@ use, so ``import sim`` costs nothing until one is asked for.
 from darts.lazy import lazy_exports as _lazy_exports
 
 __getattr__, __dir__, __all__ = _lazy_exports(__name__, {
-    "simulate": "api", "run_job": "api", "SimJob": "api", "Simulated": "api", "SimSettings": "engine.settings"})
+    "simulate": "api", "simulate_many": "api", "run_job": "api", "SimJob": "api", "Simulated": "api",
+    "SimSettings": "engine.settings"})

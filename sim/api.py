@@ -362,18 +362,36 @@ class _NothingToKeep(Exception):
         self.result = result
 
 
-def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Simulated:
-    """Check every input and output of ``job``, simulate, write its output, stats and preview."""
-    from contextlib import nullcontext
+@dataclass
+class _Prepared:
+    """A checked, loaded job ready to step: its settings (resolved), garments (a DART or an
+    ``Outfit``), body track, and what its recorded frames go to."""
 
+    job: SimJob
+    settings: SimSettings
+    dressing: _Dressing
+    garments: object
+    track: object
+    frames: _Frames
+
+    @property
+    def winding(self) -> bool:
+        """Whether to measure by winding number: as asked, else when stats are written."""
+        return self.job.winding if self.job.winding is not None else self.job.stats is not None
+
+    def writer(self):
+        """The job's output writer (None without an output), its frames routed to it."""
+        self.frames.writer = _writer(self.job, self.dressing, self.track) if self.job.output is not None else None
+        return self.frames.writer
+
+
+def _prepare(job: SimJob, keep_frames: bool, progress: bool) -> _Prepared:
+    """Check every input and output of ``job``, load its garments, motion and body, pose the body."""
     from darts.api import load_body
     from sim.body_track import build_body_track
-    from sim.run import simulate as run_frames
-    from sim.run import summary
 
     if not isinstance(job, SimJob):
         raise check.refuse("job", "a SimJob", job)
-    keep_frames, progress = check.switch(keep_frames, "keep_frames"), check.switch(progress, "progress")
     settings = job.check()
     dressing = _load_garments(job)
     motion = _load_motion(job)
@@ -387,19 +405,17 @@ def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Si
 
         garments = outfit_model(dressing.darts, dressing.names, body.shaped(own)[0][0].double().numpy(), body.faces)
     track = build_body_track(body, motion, settings.fps, job.settle, betas=target, start_betas=own, progress=progress)
-
     frames = _Frames(job, track, keep_frames)
     frames.parts = list(zip(dressing.names, dressing.slices))
-    try:
-        with (_writer(job, dressing, track) if job.output is not None else nullcontext()) as writer:
-            frames.writer = writer
-            result = run_frames(garments, track, settings, frames, progress=progress,
-                                winding=job.winding if job.winding is not None else job.stats is not None,
-                                measure_every=job.measure_every)
-            if not result.frames:
-                raise _NothingToKeep(result)
-    except _NothingToKeep as nothing:
-        result = nothing.result
+    return _Prepared(job, settings, dressing, garments, track, frames)
+
+
+def _finish(prepared: _Prepared, result, keep_frames: bool, progress: bool) -> Simulated:
+    """The job's preview and stats written, and what it returns."""
+    from sim.run import summary
+
+    job, frames, dressing, track, settings = (prepared.job, prepared.frames, prepared.dressing, prepared.track,
+                                              prepared.settings)
     if job.preview and result.frames:
         frames.render_preview(job, dressing, track, progress)
     stats = summary(result, sum(len(d.vertices) for d in dressing.darts))
@@ -411,3 +427,74 @@ def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Si
                      garment_faces=dressing.faces, body_faces=np.asarray(track.faces), fps=settings.fps, stats=stats,
                      stable=result.stable, message=result.message, garment_names=dressing.names,
                      garment_slices=dressing.slices)
+
+
+def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Simulated:
+    """Check every input and output of ``job``, simulate, write its output, stats and preview."""
+    from contextlib import nullcontext
+
+    from sim.run import simulate as run_frames
+
+    keep_frames, progress = check.switch(keep_frames, "keep_frames"), check.switch(progress, "progress")
+    prepared = _prepare(job, keep_frames, progress)
+    try:
+        with prepared.writer() or nullcontext():
+            result = run_frames(prepared.garments, prepared.track, prepared.settings, prepared.frames, progress=progress,
+                                winding=prepared.winding, measure_every=job.measure_every)
+            if not result.frames:
+                raise _NothingToKeep(result)
+    except _NothingToKeep as nothing:
+        result = nothing.result
+    return _finish(prepared, result, keep_frames, progress)
+
+
+def _solver_key(prepared: _Prepared) -> tuple:
+    """What jobs stepped by one solver must share: the settings, the cloth's thickness and friction
+    (one per model), and how the frames are measured."""
+    from sim.outfit import Outfit
+
+    garments = prepared.garments
+    material = garments.model.material if isinstance(garments, Outfit) else garments.material
+    return (json.dumps(asdict(prepared.settings), sort_keys=True), float(material["thickness"]),
+            float(material["friction"]), prepared.winding, prepared.job.measure_every)
+
+
+def simulate_many(jobs: Sequence[SimJob], keep_frames: bool = True, progress: bool = False,
+                  worlds: int | None = None) -> list[Simulated]:
+    """Run ``jobs`` as many worlds of one solver (``sim.worlds``): their particles, constraints and
+    bodies side by side in the same arrays, each job its own garments, motion and body shape, no
+    contact between jobs; each job's ``Simulated``, outputs, stats and preview as ``run_job`` gives
+    them. Every job is checked before any runs. Jobs that cannot share a solver (other settings,
+    another cloth thickness or friction, other measuring) run in separate solvers, in order of their
+    first job; ``worlds``: at most this many jobs per solver (default: all that can share one).
+    A job that goes unstable stops there with its good frames, and the others go on."""
+    from sim.worlds import World, simulate_worlds
+
+    if isinstance(jobs, SimJob) or not isinstance(jobs, Sequence):
+        raise check.refuse("jobs", "a list of SimJobs", jobs)
+    keep_frames, progress = check.switch(keep_frames, "keep_frames"), check.switch(progress, "progress")
+    worlds = check.optional_number(worlds, "worlds", 1, whole=True)
+    prepared = [_prepare(job, keep_frames, progress) for job in jobs]
+    groups: dict[tuple, list[int]] = {}
+    for index, p in enumerate(prepared):
+        groups.setdefault(_solver_key(p), []).append(index)
+    done: dict[int, Simulated] = {}
+    for members in groups.values():
+        size = worlds or len(members)
+        for first in range(0, len(members), size):
+            chunk = [prepared[i] for i in members[first:first + size]]
+            writers = [p.writer() for p in chunk]
+            try:
+                results = simulate_worlds([World(p.garments, p.track, p.frames) for p in chunk], chunk[0].settings,
+                                          progress=progress, winding=chunk[0].winding,
+                                          measure_every=chunk[0].job.measure_every)
+            except BaseException:
+                for writer in writers:
+                    if writer is not None:
+                        writer.discard()
+                raise
+            for index, p, writer, result in zip(members[first:first + size], chunk, writers, results):
+                if writer is not None:
+                    writer.close() if result.frames else writer.discard()
+                done[index] = _finish(p, result, keep_frames, progress)
+    return [done[i] for i in range(len(prepared))]

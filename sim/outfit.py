@@ -24,7 +24,7 @@ import numpy as np
 from darts.dart.model import Dart
 from darts.errors import DartsInputError
 from sim.engine.layers import COVER, covering_offsets
-from sim.engine.model import ClothModel, cloth_model, dihedral_angles
+from sim.engine.model import ClothModel, cloth_model, dihedral_angles, join_models
 
 #: thicknesses between two layers where they overlap, at the start
 LAYER_GAP = 2.0
@@ -65,32 +65,6 @@ def garment_names(labels: list[str]) -> list[str]:
             name, k = f"{base}_{k}", k + 1
         names.append(name)
     return names
-
-
-def _join(models: list[ClothModel], names: list[str]) -> ClothModel:
-    """One model holding ``models`` side by side (indices shifted), loops and seams prefixed by name."""
-    offsets = np.cumsum([0] + [len(m.rest) for m in models])
-    seam_offsets = np.cumsum([0] + [len(m.seam_names) for m in models])
-
-    def cat(key, shift=True):
-        return np.concatenate([getattr(m, key) + (offsets[k] if shift else 0) for k, m in enumerate(models)])
-
-    anchors = np.concatenate([np.where(m.spring_anchors >= 0, m.spring_anchors + offsets[k], -1) for k, m in enumerate(models)])
-    material = dict(models[0].material)
-    material["thickness"] = max(float(m.material["thickness"]) for m in models)
-    material["friction"] = max(float(m.material["friction"]) for m in models)
-    return ClothModel(
-        rest=cat("rest", False), particle_of_vertex=cat("particle_of_vertex"), faces=cat("faces"), mass=cat("mass", False),
-        edges=cat("edges"), edge_rest=cat("edge_rest", False), hinges=cat("hinges"),
-        hinge_rest_angle=cat("hinge_rest_angle", False), springs=cat("springs"), spring_rest=cat("spring_rest", False),
-        spring_stiffness=cat("spring_stiffness", False),
-        spring_seam=np.concatenate([m.spring_seam + seam_offsets[k] for k, m in enumerate(models)]),
-        spring_anchors=anchors.reshape(-1, 2), edge_stiffness=cat("edge_stiffness", False),
-        hinge_bend=cat("hinge_bend", False), body_offset=cat("body_offset", False),
-        layer=np.concatenate([np.full(len(m.rest), k) for k, m in enumerate(models)]),
-        seam_names=[f"{names[k]}/{s}" for k, m in enumerate(models) for s in m.seam_names], material=material,
-        loops={f"{names[k]}/{line}": loop + offsets[k] for k, m in enumerate(models) for line, loop in m.loops.items()},
-    )
 
 
 def _ring_mean(values: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -159,7 +133,7 @@ def outfit_model(darts: list[Dart], labels: list[str], body_vertices: np.ndarray
     models = [_remeasured(m) if lift.any() else m for m, lift in zip(models, lifts)]
     vertex_edges = np.cumsum([0] + [len(d.vertices) for d in darts])
     particle_edges = np.cumsum([0] + [len(m.rest) for m in models])
-    model = _join(models, names)
+    model = join_models(models, names)
     outfit = Outfit(darts=list(darts), names=names, model=model,
                     vertex_slices=[slice(a, b) for a, b in zip(vertex_edges[:-1], vertex_edges[1:])],
                     particle_slices=[slice(a, b) for a, b in zip(particle_edges[:-1], particle_edges[1:])],

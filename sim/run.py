@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -20,7 +20,7 @@ from darts.interrupts import raise_if_interrupted
 from sim.body_track import BodyTrack
 from sim.engine.model import ClothModel, cloth_model
 from sim.engine.settings import SimSettings
-from sim.engine.simulation import Simulation
+from sim.engine.simulation import FrameMeasure, Simulation
 from sim.outfit import Outfit, layer_crossings, layer_order
 from sim.quality import WaistSlide, edge_strain, strain_summary, waist_slide
 
@@ -70,6 +70,95 @@ def _layer_measures(outfit: Outfit, particles: np.ndarray, track: BodyTrack, k: 
     return {"layers": under, "layers_closed": inside, "layer_crossings": layer_crossings(outfit, particles)}
 
 
+class JobRecorder:
+    """One job's side of the frame loop: which measures each frame needs, whether the run is still
+    stable, and every recorded frame's measures (``RunResult.frames``), handed to ``sink``.
+
+    ``garments`` is a DART or an ``Outfit`` on ``track``; particles are given in the job's own world
+    frame. Frames ``k`` count from the track's first (the settle blend's); the measures that query the
+    body or the garment are taken on every ``measure_every``-th recorded frame and the last."""
+
+    def __init__(self, garments: Dart | Outfit, model: ClothModel, track: BodyTrack, settings: SimSettings,
+                 sink: Callable[[np.ndarray, np.ndarray], None] | None, winding: bool, measure_every: int):
+        self.garments, self.model, self.track, self.settings = garments, model, track, settings
+        self.outfit = garments if isinstance(garments, Outfit) else None
+        self.sink, self.winding, self.measure_every = sink, winding, measure_every
+        self.result = RunResult(particles=len(model.rest), settings=settings)
+        self.previous = None  # the particles at the last frame, settle or recorded
+        self.slides = None  # each garment's WaistSlide (None without a waist line), from the first recorded frame
+
+    @property
+    def total(self) -> int:
+        """Frames of the track, the settle blend's included."""
+        return len(self.track.vertices)
+
+    def wants(self, k: int) -> tuple[bool, bool]:
+        """(the body and garment queries, the winding-number ones) at frame ``k``."""
+        recorded = k - self.track.settle_frames
+        full = recorded >= 0 and (recorded % self.measure_every == 0 or k == self.total - 1)
+        return full, self.winding and full
+
+    def stopped(self, k: int, measure: FrameMeasure, diagnose: Callable[[], str]) -> bool:
+        """True (and the run's message set) when frame ``k`` has a non-finite value or a particle
+        faster than ``settings.max_speed``; ``diagnose()`` says where it starts."""
+        limit = self.settings.max_speed
+        if measure.finite and measure.max_speed <= limit:
+            return False
+        phase, index = ("settle", k) if k < self.track.settle_frames else ("frame", k - self.track.settle_frames)
+        what = "a non-finite position or velocity" if not measure.finite else f"a particle at {measure.max_speed:.1f} m/s"
+        self.result.stable = False
+        self.result.message = (f"unstable at {phase} {index}: {what} (limit {limit:g} m/s); {diagnose()}; "
+                               f"kept the {len(self.result.frames)} good frames before it")
+        return True
+
+    def take(self, k: int, particles: np.ndarray, measure: FrameMeasure) -> None:
+        """Frame ``k``'s particles [P,3] (world frame) and measure (its queries kept where ``wants``
+        asked for them): a settle frame is only remembered, a recorded one measured and sunk."""
+        full, winding = self.wants(k)
+        if not full:
+            measure = replace(measure, penetration=None, penetration_in_body_overlap=None, self_intersections=None)
+        if not winding:
+            measure = replace(measure, penetration_winding=None, penetration_winding_in_body_overlap=None)
+        previous, self.previous = self.previous, particles
+        if k < self.track.settle_frames:
+            return
+        model, outfit, garments, fps = self.model, self.outfit, self.garments, self.settings.fps
+        # the recorded frames' largest speed: each particle's displacement since the last frame
+        frame_speed = 0.0 if previous is None else float(np.linalg.norm(particles - previous, axis=1).max()) * fps
+        vertices = particles[model.particle_of_vertex]
+        body = self.track.vertices[k]
+        if self.slides is None:  # the first recorded frame: the settled waistbands are tied to the skin
+            faces = self.track.faces
+            self.slides = ([waist_slide(garments, vertices, body, faces)] if outfit is None else
+                           [waist_slide(dart, part, body, faces) for dart, part in zip(outfit.darts, outfit.split(vertices))])
+        strain = edge_strain(model, particles)
+        frame = {"strain": strain_summary(strain), "penetration": measure.penetration,
+                 "penetration_in_body_overlap": measure.penetration_in_body_overlap,
+                 "penetration_winding": measure.penetration_winding,
+                 "penetration_winding_in_body_overlap": measure.penetration_winding_in_body_overlap,
+                 "max_speed": measure.max_speed, "max_substep_speed": measure.max_substep_speed,
+                 "frame_speed": frame_speed, "self_intersections": measure.self_intersections}
+        if outfit is None:
+            frame.update(_garment_measures(garments, vertices, body, self.slides[0]))
+        else:
+            each = {name: {"strain": _layer_strain(model, strain, layer), **_garment_measures(dart, part, body, slide)}
+                    for layer, (name, dart, part, slide) in enumerate(zip(outfit.names, outfit.darts,
+                                                                           outfit.split(vertices), self.slides))}
+            waists = [g["waist_slide"] for g in each.values() if g["waist_slide"] is not None]
+            frame.update(waist_slide=waists[0] if waists else None, garments=each,
+                         seam_gap={f"{name}/{seam}": gap for name, g in each.items() for seam, gap in g["seam_gap"].items()},
+                         **(_layer_measures(outfit, particles, self.track, k, self.winding) if full else
+                            {"layers": None, "layers_closed": None, "layer_crossings": None}))
+        self.result.frames.append(frame)
+        if self.sink is not None:
+            self.sink(vertices, body)
+
+
+def job_model(garments: Dart | Outfit) -> ClothModel:
+    """The solver's model of a DART, or an outfit's joined one."""
+    return garments.model if isinstance(garments, Outfit) else cloth_model(garments)
+
+
 def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
              sink: Callable[[np.ndarray, np.ndarray], None] | None = None, progress: bool = False,
              winding: bool = False, measure_every: int = 1) -> RunResult:
@@ -83,65 +172,23 @@ def simulate(garments: Dart | Outfit, track: BodyTrack, settings: SimSettings,
     the speeds on every frame."""
     from tqdm import tqdm
 
-    outfit = garments if isinstance(garments, Outfit) else None
-    model = outfit.model if outfit is not None else cloth_model(garments)
+    model = job_model(garments)
     solver = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], settings, track.parts)
-    result = RunResult(particles=len(model.rest), settings=solver.settings)
-    total = len(track.vertices)
+    recorder = JobRecorder(garments, model, track, solver.settings, sink, winding, measure_every)
+    result = recorder.result
     start = time.perf_counter()
-    bar = tqdm(total=total - 1, unit="frame", desc="simulating", disable=not progress, leave=False)
-    previous = None  # the particles at the last frame, settle or recorded
-    slides = None  # each garment's WaistSlide (None without a waist line), from the first recorded frame
-    for k in range(total):
+    bar = tqdm(total=recorder.total - 1, unit="frame", desc="simulating", disable=not progress, leave=False)
+    for k in range(recorder.total):
         if k > 0:
             raise_if_interrupted()
             solver.step_frame(track.vertices[k])
             result.simulated_frames += 1
             bar.update(1)
-        recorded = k - track.settle_frames  # the recorded frame's number (negative in the settle)
-        full = recorded >= 0 and (recorded % measure_every == 0 or k == total - 1)
-        measure = solver.measure(winding=winding and full, bodies=full)
-        phase = "settle" if k < track.settle_frames else "frame"
-        index = k if k < track.settle_frames else k - track.settle_frames
-        if not measure.finite or measure.max_speed > settings.max_speed:
-            what = "a non-finite position or velocity" if not measure.finite else f"a particle at {measure.max_speed:.1f} m/s"
-            result.stable = False
-            result.message = (f"unstable at {phase} {index}: {what} (limit {settings.max_speed:g} m/s); "
-                              f"{solver.diagnose()}; kept the {len(result.frames)} good frames before it")
+        full, wind = recorder.wants(k)
+        measure = solver.measure(winding=wind, bodies=full)
+        if recorder.stopped(k, measure, solver.diagnose):
             break
-        if k < track.settle_frames:
-            previous = solver.positions()
-            continue
-        particles = solver.positions()
-        # the recorded frames' largest speed: each particle's displacement since the last frame
-        frame_speed = 0.0 if previous is None else float(np.linalg.norm(particles - previous, axis=1).max()) * settings.fps
-        previous = particles
-        vertices = particles[model.particle_of_vertex]
-        body = track.vertices[k]
-        if slides is None:  # the first recorded frame: the settled waistbands are tied to the skin
-            slides = ([waist_slide(garments, vertices, body, track.faces)] if outfit is None else
-                      [waist_slide(dart, part, body, track.faces) for dart, part in zip(outfit.darts, outfit.split(vertices))])
-        strain = edge_strain(model, particles)
-        frame = {"strain": strain_summary(strain), "penetration": measure.penetration,
-                 "penetration_in_body_overlap": measure.penetration_in_body_overlap,
-                 "penetration_winding": measure.penetration_winding,
-                 "penetration_winding_in_body_overlap": measure.penetration_winding_in_body_overlap,
-                 "max_speed": measure.max_speed, "max_substep_speed": measure.max_substep_speed,
-                 "frame_speed": frame_speed, "self_intersections": measure.self_intersections}
-        if outfit is None:
-            frame.update(_garment_measures(garments, vertices, body, slides[0]))
-        else:
-            each = {name: {"strain": _layer_strain(model, strain, layer), **_garment_measures(dart, part, body, slide)}
-                    for layer, (name, dart, part, slide) in enumerate(zip(outfit.names, outfit.darts,
-                                                                           outfit.split(vertices), slides))}
-            waists = [g["waist_slide"] for g in each.values() if g["waist_slide"] is not None]
-            frame.update(waist_slide=waists[0] if waists else None, garments=each,
-                         seam_gap={f"{name}/{seam}": gap for name, g in each.items() for seam, gap in g["seam_gap"].items()},
-                         **(_layer_measures(outfit, particles, track, k, winding) if full else
-                            {"layers": None, "layers_closed": None, "layer_crossings": None}))
-        result.frames.append(frame)
-        if sink is not None:
-            sink(vertices, body)
+        recorder.take(k, solver.positions(), measure)
     bar.close()
     result.wall_seconds = time.perf_counter() - start
     return result

@@ -156,3 +156,44 @@ def test_bad_batch_input_is_one_line_exit_2_and_no_output(case, problem, listing
 def test_listing_a_batch_writes_nothing(tmp_path, run_darts):
     code, stdout, _ = run_darts("batch", EXAMPLE, "-o", tmp_path / "out", "--list")
     assert code == 0 and "darts-sim" in stdout and not (tmp_path / "out").exists()
+
+
+def test_a_group_of_jobs_is_published_job_by_job_and_a_bad_one_fails_alone(tmp_path):
+    """``darts.jobs.run_group`` (``darts batch --worlds``): each job of a group in its own folder
+    with its own row; a group refused as a whole is done job by job, so only the bad job fails."""
+    from darts.jobs import RESULT, Job, run_group
+
+    def together(jobs, folders):
+        if any(job.inputs["bad"] for job in jobs):
+            raise DartsInputError("bad.npz", "not a garment")
+        for folder in folders:
+            (folder / "out.txt").write_text("together")
+        return [{"how": "together"} for _ in jobs]
+
+    def alone(job, folder):
+        if job.inputs["bad"]:
+            raise DartsInputError("bad.npz", "not a garment")
+        (folder / "out.txt").write_text("alone")
+        return {"how": "alone"}
+
+    good = [Job(f"good{k}", {"bad": False}) for k in range(3)]
+    rows = run_group(together, alone, good, tmp_path)
+    assert [r["status"] for r in rows] == ["ok"] * 3 and all(r["how"] == "together" for r in rows)
+    assert all(json.loads((tmp_path / j.id / RESULT).read_text())["id"] == j.id for j in good)
+    mixed = [Job("a", {"bad": False}), Job("b", {"bad": True}), Job("c", {"bad": False})]
+    rows = run_group(together, alone, mixed, tmp_path)
+    assert [r["status"] for r in rows] == ["ok", "failed", "ok"] and rows[1]["error"] == "bad.npz: not a garment"
+    assert (tmp_path / "a" / "out.txt").read_text() == "alone" and not (tmp_path / "b").exists()
+    assert not list(tmp_path.glob(".*.tmp-*"))
+
+
+@pytest.mark.slow
+def test_a_batch_steps_its_jobs_as_worlds_of_one_solver(coarse_garments, tmp_path, run_darts):
+    spec = _spec(tmp_path, [str(coarse_garments / "short-skirt.npz"), str(coarse_garments / "sleeveless-top.npz")], 2)
+    out = tmp_path / "out"
+    code, stdout, _ = run_darts("batch", spec, "-o", out, "--worlds", "4", "--workers", "2")
+    assert code == 0 and "8 of 8 jobs succeeded" in stdout
+    rows = list(read_manifest(out / MANIFEST).values())
+    assert len(rows) == 8 and all(r["stable"] and r["frames"] == 2 for r in rows)
+    assert all(r["max_penetration"] <= 0.01 for r in rows if r["body"] == "mean")
+    assert all({"result.json", "stats.json", "sim.usdc"} <= {p.name for p in (out / r["id"]).iterdir()} for r in rows)

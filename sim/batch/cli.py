@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from darts.errors import DartsInputError
 from darts.jobs import MANIFEST, Job, check_cluster_options, check_out_dir, run_jobs
 
 
@@ -21,19 +22,22 @@ def _table(rows: list[dict]) -> str:
 
 
 def batch(args) -> int:
-    from sim.batch.job import run_simulation
+    from sim.batch.job import run_simulation, run_simulations
     from sim.batch.spec import JOB_FOLDER, load_jobs
 
     out = Path(args.output)
     jobs = [Job(job.id, {**job.inputs, "command": job.inputs["command"].replace(JOB_FOLDER, str(out / job.id))})
             for job in load_jobs(args.spec)]
     check_cluster_options(args.workers, args.address)
+    if args.worlds < 1:
+        raise DartsInputError(None, f"--worlds must be at least 1, got {args.worlds}")
     if args.list:  # writes nothing, not even OUT_DIR
         for job in jobs:
             print(f"{job.id}\n  {job.inputs['command']}")
         return 0
     check_out_dir(out)
-    rows = run_jobs(jobs, args.output, run_simulation, workers=args.workers, address=args.address, retry=args.retry)
+    rows = run_jobs(jobs, args.output, run_simulation, workers=args.workers, address=args.address, retry=args.retry,
+                    group=run_simulations if args.worlds > 1 else None, group_size=args.worlds)
     print(_table(rows))
     failed = [row for row in rows if row["status"] != "ok"]
     print(f"{len(rows) - len(failed)} of {len(rows)} jobs succeeded; manifest: {Path(args.output) / MANIFEST}")
@@ -55,5 +59,8 @@ def add_parser(groups) -> None:
                         help="jobs at once (default: one per core here, every CPU of a cluster)")
     parser.add_argument("--retry", type=int, default=0, metavar="K",
                         help="re-run a job up to K times when its worker process dies (default 0)")
+    parser.add_argument("--worlds", type=int, default=1, metavar="N",
+                        help="jobs per worker stepped together as worlds of one solver (sim.simulate_many; "
+                             "for --device cuda, where one GPU holds many garments; default 1: one job at a time)")
     parser.add_argument("--list", action="store_true", help="print the jobs and their darts-sim commands, run nothing")
     parser.set_defaults(run=batch)

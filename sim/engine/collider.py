@@ -54,11 +54,14 @@ class BodyCollider:
     particle that much further off the body (an outer layer's, over the layers under it). ``grip``
     [count]: each particle's friction where its contact face grips (a waistband's, on the torso and
     hips: ``gripping_faces`` of the body's ``parts`` [V]; every face without them; ``ClothModel.grip``);
-    the material's ``friction`` elsewhere and on the ground."""
+    the material's ``friction`` elsewhere and on the ground. ``world`` [count] and ``body_world`` [V]:
+    each particle's and each body vertex's world in a many-world model (``sim.worlds``; default all
+    0): a particle's search reach follows its own world's body."""
 
     def __init__(self, body_faces: np.ndarray, body_vertices: np.ndarray, count: int, thickness: float,
                  friction: float, grip: np.ndarray, settings: SimSettings, offset: np.ndarray | None = None,
-                 parts: np.ndarray | None = None):
+                 parts: np.ndarray | None = None, world: np.ndarray | None = None,
+                 body_world: np.ndarray | None = None):
         device = self.device = settings.device
         self.launch = Launcher(device, settings.replay_launches)
         self.settings, self.count = settings, count
@@ -84,7 +87,13 @@ class BodyCollider:
         self.query_offset = wp.zeros(count, dtype=wp.vec3, device=device)
         self.body_push = wp.zeros(count, dtype=float, device=device)
         self.ground_push = wp.zeros(count, dtype=float, device=device)
-        self.speed = settings.max_body_speed
+        self.body_world = np.zeros(len(body_vertices), np.int64) if body_world is None else np.asarray(body_world)
+        self.worlds = int(self.body_world.max(initial=0)) + 1
+        self.world = wp.array(np.zeros(count, np.int32) if world is None else np.asarray(world, np.int32), dtype=wp.int32,
+                              device=device)
+        self.speed = np.full(self.worlds, settings.max_body_speed)  # each world's fastest body vertex (m/s)
+        self.reach = wp.zeros(self.worlds, dtype=float, device=device)  # each world's search reach (m)
+        self.body_speed = wp.zeros(self.worlds, dtype=float, device=device)
         self.time = 0.0  # s since the run started, at the start of the current frame
         self.unrefreshed = 0  # substeps since every particle was last searched (the first search takes all)
 
@@ -96,11 +105,12 @@ class BodyCollider:
 
     def begin_frame(self, body_next: np.ndarray) -> None:
         """The body will move from where it is now to ``body_next`` [V,3] during the next frame; the
-        search reach covers what its fastest vertex travels between searches."""
+        search reach covers what its fastest vertex (each world's own) travels between searches."""
         self.start, self.end = self.end, self.start
         self.end.assign(np.ascontiguousarray(body_next, np.float32))
-        moved = np.linalg.norm(np.asarray(body_next, np.float32) - self.start.numpy(), axis=1).max()
-        self.speed = max(float(moved) * self.settings.fps, self.settings.max_body_speed)
+        moved = np.linalg.norm(np.asarray(body_next, np.float32) - self.start.numpy(), axis=1)
+        fastest = [moved.max()] if self.worlds == 1 else [moved[self.body_world == w].max() for w in range(self.worlds)]
+        self.speed = np.array([max(float(m) * self.settings.fps, self.settings.max_body_speed) for m in fastest])
 
     def end_frame(self) -> None:
         """Place the body at the end of the frame just stepped."""
@@ -130,18 +140,19 @@ class BodyCollider:
         search = substep % interval == 0
         self.place((substep + 1) / settings.substeps, refit=search)
         if search:
-            reach = (self.thickness + self.max_offset + settings.contact_reach + settings.contact_skin
-                     + interval * dt * self.speed)
+            self.reach.assign((self.thickness + self.max_offset + settings.contact_reach + settings.contact_skin
+                               + interval * dt * self.speed).astype(np.float32))
+            self.body_speed.assign(self.speed.astype(np.float32))
             started = self.time + substep * dt
             # every particle, however little it moved, at the first search once the refresh interval is over
             skin = settings.contact_skin
             if self.unrefreshed >= settings.contact_refresh_interval:
                 skin, self.unrefreshed = 0.0, 0
             self.launch(collider_kernels.find_contacts, self.count,
-                        [self.mesh.id, x, x_start, reach, self.thickness, int(settings.continuous_collision),
-                         CCD_MIN_PATH, started + dt - self.window_time, started, started + dt, self.window_start,
-                         skin, self.speed, self.query_time, self.query_offset, self.contact.face,
-                         self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
+                        [self.mesh.id, x, x_start, self.world, self.reach, self.thickness,
+                         int(settings.continuous_collision), CCD_MIN_PATH, started + dt - self.window_time, started,
+                         started + dt, self.window_start, skin, self.body_speed, self.query_time, self.query_offset,
+                         self.contact.face, self.contact.uv, self.contact.local, int(settings.crease_contacts), self.second.face,
                          self.second.uv, self.second.local, int(settings.overlap_release)])
             self.window_time = started
         c, s = self.contact, self.second

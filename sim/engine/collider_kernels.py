@@ -39,15 +39,18 @@ def face_frame(mesh: wp.uint64, face: int):
 
 
 @wp.kernel
-def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3), reach: float,
+def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3),
+                  world: wp.array(dtype=wp.int32), world_reach: wp.array(dtype=float),
                   thickness: float, continuous: int, min_path: float, elapsed: float, started: float, now: float,
-                  window_start: wp.array(dtype=wp.vec3), skin: float, body_speed: float,
+                  window_start: wp.array(dtype=wp.vec3), skin: float, world_body_speed: wp.array(dtype=float),
                   query_time: wp.array(dtype=float), query_offset: wp.array(dtype=wp.vec3),
                   contact_face: wp.array(dtype=wp.int32), contact_uv: wp.array(dtype=wp.vec2),
                   contact_local: wp.array(dtype=wp.vec3), second: int, second_face: wp.array(dtype=wp.int32),
                   second_uv: wp.array(dtype=wp.vec2), second_local: wp.array(dtype=wp.vec3), release: int):
     """Closest body point within ``reach`` of each particle (face, barycentrics) and the outward
     direction there, stored in the face's own frame so that it turns with the face (face -1: none).
+    ``reach`` and ``body_speed`` are the particle's world's (``world_reach[world[i]]``,
+    ``world_body_speed[world[i]]``: each job's own body in a many-world model).
 
     A particle is queried again only once it may have changed (``skin`` > 0; 0 queries every one);
     one in a crease (with a second contact) always is, since its closest face changes fastest. With a
@@ -83,6 +86,8 @@ def find_contacts(mesh: wp.uint64, x: wp.array(dtype=wp.vec3), x_start: wp.array
     opens."""
     i = wp.tid()
     p = x[i]
+    reach = world_reach[world[i]]
+    body_speed = world_body_speed[world[i]]
     if skin > 0.0 and query_time[i] >= 0.0 and second_face[i] < 0:
         moved = float(0.0)
         if contact_face[i] >= 0:

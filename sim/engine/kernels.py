@@ -43,12 +43,12 @@ def velocities_from_positions(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtyp
 
 
 @wp.kernel
-def track_fastest(v: wp.array(dtype=wp.vec3), fastest: wp.array(dtype=float)):
-    """fastest[0] = max(fastest[0], |v_i|) over the particles: the largest speed of any substep
-    (reset once a frame), which tells cloth buzzing between contacts inside the substeps from what
-    the recorded frames show."""
+def track_fastest(v: wp.array(dtype=wp.vec3), world: wp.array(dtype=wp.int32), fastest: wp.array(dtype=float)):
+    """fastest[w] = max(fastest[w], |v_i|) over the particles i of each world w: the largest speed of
+    any substep (reset once a frame), which tells cloth buzzing between contacts inside the substeps
+    from what the recorded frames show."""
     i = wp.tid()
-    wp.atomic_max(fastest, 0, wp.length(v[i]))
+    wp.atomic_max(fastest, world[i], wp.length(v[i]))
 
 
 @wp.func
@@ -120,37 +120,39 @@ def dihedral_gradient(xi: wp.vec3, xj: wp.vec3, xk: wp.vec3, xl: wp.vec3, rest_c
 
 @wp.kernel
 def frame_measures(mesh: wp.uint64, winding_mesh: wp.uint64, bodies: int, winding: int, x: wp.array(dtype=wp.vec3),
-                   v: wp.array(dtype=wp.vec3),
-                   inside: wp.array(dtype=wp.int32), max_speed: wp.array(dtype=float),
+                   v: wp.array(dtype=wp.vec3), world: wp.array(dtype=wp.int32),
+                   inside: wp.array2d(dtype=wp.int32), max_speed: wp.array(dtype=float),
                    finite: wp.array(dtype=wp.int32)):
-    """Per frame: particles inside the body (sign by the angle-weighted pseudo-normal at the closest
-    point, exact for a closed body that does not intersect itself) in inside[0], those of them whose
-    closest body point is ``buried`` inside another part of the body (the posed body overlaps itself
-    there) in inside[1], inside the body by its winding number in inside[2] (``winding``), those of
-    them it covers twice (winding number > 1.5: inside two parts where the posed body overlaps itself)
-    in inside[3], the largest speed, any non-finite value.
+    """Per frame and per world w (``world[i]``: particle i's): particles inside the body (sign by the
+    angle-weighted pseudo-normal at the closest point, exact for a closed body that does not
+    intersect itself) in inside[w, 0], those of them whose closest body point is ``buried`` inside
+    another part of the body (the posed body overlaps itself there) in inside[w, 1], inside the body
+    by its winding number in inside[w, 2] (``winding``), those of them it covers twice (winding
+    number > 1.5: inside two parts where the posed body overlaps itself) in inside[w, 3], the largest
+    speed in max_speed[w], any non-finite value (finite[w] = 0).
     ``bodies`` 0: only the speed and the finite check (no body query)."""
     i = wp.tid()
     p = x[i]
     vi = v[i]
+    w = world[i]
     if not (wp.isfinite(p) and wp.isfinite(vi)):
-        wp.atomic_min(finite, 0, 0)
+        wp.atomic_min(finite, w, 0)
         return
-    wp.atomic_max(max_speed, 0, wp.length(vi))
+    wp.atomic_max(max_speed, w, wp.length(vi))
     if bodies == 0:
         return
     query = wp.mesh_query_point_sign_normal(mesh, p, 10.0)
     if query.result and query.sign < 0.0:
-        wp.atomic_add(inside, 0, 1)
+        wp.atomic_add(inside, w, 0, 1)
         if buried(mesh, wp.mesh_eval_position(mesh, query.face, query.u, query.v), wp.mesh_eval_face_normal(mesh, query.face)):
-            wp.atomic_add(inside, 1, 1)
+            wp.atomic_add(inside, w, 1, 1)
     if winding != 0:
         by_winding = wp.mesh_query_point_sign_winding_number(winding_mesh, p, 10.0)
         if by_winding.result and by_winding.sign < 0.0:
-            wp.atomic_add(inside, 2, 1)
+            wp.atomic_add(inside, w, 2, 1)
             twice = wp.mesh_query_point_sign_winding_number(winding_mesh, p, 10.0, 2.0, 1.5)
             if twice.result and twice.sign < 0.0:
-                wp.atomic_add(inside, 3, 1)
+                wp.atomic_add(inside, w, 3, 1)
 
 
 @wp.kernel

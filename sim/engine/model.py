@@ -12,7 +12,8 @@
 - loops: each feature line as a loop of particles (for ``sim.engine.tethers``);
 - per constraint, the material's values (stretch stiffness per edge, bending stiffness per hinge)
   and per particle its layer (the garment it belongs to: 0 for one garment; ``sim.outfit`` joins
-  several garments into one model, inner first).
+  several garments into one model, inner first) and its world (the job it belongs to: 0 for one
+  job; ``sim.worlds`` joins several jobs' models, each on its own body, into one model).
 """
 from __future__ import annotations
 
@@ -53,6 +54,16 @@ class ClothModel:
     seam_names: list[str]
     material: dict
     loops: dict = field(default_factory=dict)  # feature line name -> its closed loop of particle indices
+    world: np.ndarray | None = None  # [P] the job (world) of each particle; None: all in world 0
+
+    def __post_init__(self):
+        if self.world is None:
+            self.world = np.zeros(len(self.rest), np.int64)
+
+    @property
+    def worlds(self) -> int:
+        """How many jobs (worlds) the model holds side by side."""
+        return int(self.world.max(initial=0)) + 1
 
     def grip(self, waist: float) -> np.ndarray:
         """[P] each particle's Coulomb friction against the body where it grips (``BodyCollider``'s
@@ -81,6 +92,43 @@ class ClothModel:
         rest = np.concatenate([self.edge_rest, self.spring_rest[sprung]])
         stiffness = np.concatenate([self.edge_stiffness, self.spring_stiffness[sprung]])
         return pairs, rest, stiffness
+
+
+def join_models(models: list[ClothModel], names: list[str], worlds: bool = False) -> ClothModel:
+    """One model holding ``models`` side by side (indices shifted; loops and seams prefixed by
+    ``names``). As an outfit's garments (``worlds`` False) model k is layer k, and the thickness and
+    friction are the largest of the models'; as worlds (``worlds`` True) model k is world k, each
+    keeps its own layers, and their thickness and friction must agree (one solver steps them all)."""
+    offsets = np.cumsum([0] + [len(m.rest) for m in models])
+    seam_offsets = np.cumsum([0] + [len(m.seam_names) for m in models])
+
+    def cat(key, shift=True):
+        return np.concatenate([getattr(m, key) + (offsets[k] if shift else 0) for k, m in enumerate(models)])
+
+    def each(values):
+        return np.concatenate([np.full(len(m.rest), v) if np.ndim(v) == 0 else v for m, v in zip(models, values)])
+
+    anchors = np.concatenate([np.where(m.spring_anchors >= 0, m.spring_anchors + offsets[k], -1) for k, m in enumerate(models)])
+    material = dict(models[0].material)
+    for key in ("thickness", "friction"):
+        values = {float(m.material[key]) for m in models}
+        if worlds and len(values) > 1:
+            raise ValueError(f"worlds of one model need one {key}, got {sorted(values)}")
+        material[key] = max(values)
+    index = range(len(models))
+    return ClothModel(
+        rest=cat("rest", False), particle_of_vertex=cat("particle_of_vertex"), faces=cat("faces"), mass=cat("mass", False),
+        edges=cat("edges"), edge_rest=cat("edge_rest", False), hinges=cat("hinges"),
+        hinge_rest_angle=cat("hinge_rest_angle", False), springs=cat("springs"), spring_rest=cat("spring_rest", False),
+        spring_stiffness=cat("spring_stiffness", False),
+        spring_seam=np.concatenate([m.spring_seam + seam_offsets[k] for k, m in enumerate(models)]),
+        spring_anchors=anchors.reshape(-1, 2), edge_stiffness=cat("edge_stiffness", False),
+        hinge_bend=cat("hinge_bend", False), body_offset=cat("body_offset", False),
+        layer=each([m.layer for m in models] if worlds else list(index)),
+        world=each(list(index) if worlds else [m.world for m in models]),
+        seam_names=[f"{names[k]}/{s}" for k, m in enumerate(models) for s in m.seam_names], material=material,
+        loops={f"{names[k]}/{line}": loop + offsets[k] for k, m in enumerate(models) for line, loop in m.loops.items()},
+    )
 
 
 def dihedral_angles(points: np.ndarray, hinges: np.ndarray) -> np.ndarray:

@@ -40,18 +40,21 @@ wp = warp()
 MAX_CANDIDATES = 16
 
 
-def _speeds(v, max_speed: float) -> tuple:
-    """(mean velocity v̄ as a Warp vec3, the median of |v_i - v̄| capped at ``max_speed``) over the
-    finite velocities ``v`` [P] (a blown-up particle, the run about to stop, aside)."""
+def _speeds(v, world: np.ndarray, max_speed: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per world w (``world`` [P]: each particle's): (the mean velocity v̄_w [W,3], the median of
+    |v_i - v̄_w| capped at ``max_speed`` [W]) over its finite velocities ``v`` [P] (a blown-up
+    particle, the run about to stop, aside; zeros for a world with none)."""
     velocities = v.numpy()
+    count = int(world.max(initial=0)) + 1
+    mean, spread = np.zeros((count, 3), np.float32), np.zeros(count, np.float32)
     finite = np.isfinite(velocities).all(axis=1)
-    if not finite.any():
-        return wp.vec3(0.0), 0.0
-    if not finite.all():
-        velocities = velocities[finite]
-    mean = velocities.mean(axis=0)
-    spread = velocities - mean
-    return wp.vec3(*mean), min(float(np.median(np.sqrt(np.einsum("ij,ij->i", spread, spread)))), max_speed)
+    for w in range(count):
+        mine = velocities[finite & (world == w)] if count > 1 else velocities[finite]
+        if len(mine):
+            mean[w] = mine.mean(axis=0)
+            offset = mine - mean[w]
+            spread[w] = min(float(np.median(np.sqrt(np.einsum("ij,ij->i", offset, offset)))), max_speed)
+    return mean, spread
 
 
 def edge_faces(edges: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -82,7 +85,8 @@ class SelfContact:
     """The garment's self-contact state on the device; positions are the solver's particle array."""
 
     def __init__(self, x, rest: np.ndarray, faces: np.ndarray, edges: np.ndarray, separation: float,
-                 exclusion: float, device: str, layer: np.ndarray | None = None, record: bool = True):
+                 exclusion: float, device: str, layer: np.ndarray | None = None, record: bool = True,
+                 world: np.ndarray | None = None):
         self.x, self.device, self.count = x, device, x.shape[0]
         self.launch = Launcher(device, record)
         self.separation, self.exclusion = float(separation), float(exclusion)
@@ -115,6 +119,11 @@ class SelfContact:
         self.layer = wp.array(np.zeros(self.count, np.int32) if layer is None else np.asarray(layer, np.int32),
                               dtype=wp.int32, device=device)  # each particle's garment in an outfit
         self.layered = layer is not None and len(np.unique(layer)) > 1
+        self.world_host = np.zeros(self.count, np.int64) if world is None else np.asarray(world, np.int64)
+        self.world = wp.array(self.world_host.astype(np.int32), dtype=wp.int32, device=device)  # each particle's job
+        worlds = int(self.world_host.max(initial=0)) + 1
+        self.mean_velocity = wp.zeros(worlds, dtype=wp.vec3, device=device)  # per world (``_speeds``)
+        self.other_speed = wp.zeros(worlds, dtype=float, device=device)
 
     def search(self, x_start, v, reach: float, lookahead: float, max_speed: float,
                broad: tuple[float, float, float] | None = None) -> None:
@@ -129,15 +138,18 @@ class SelfContact:
         positions the sides are taken from); no particle's reach counts more than ``max_speed`` (m/s)."""
         self.reach = float(reach)
         self.mesh.refit()
-        mean, other = _speeds(v, max_speed)
+        mean, other = _speeds(v, self.world_host, max_speed)
+        self.mean_velocity.assign(mean)
+        self.other_speed.assign(other)
+        mean, other = self.mean_velocity, self.other_speed
         if broad is not None:
             broad_reach, broad_lookahead, most = broad
             self.launch(gather_candidates, self.count,
-                        [self.mesh.id, self.faces, self.x, v, self.rest, broad_reach, mean, other, broad_lookahead,
+                        [self.mesh.id, self.faces, self.x, v, self.rest, broad_reach, mean, other, self.world, broad_lookahead,
                          max_speed, most, self.exclusion, self.candidates, self.candidate_distance, self.candidate_count])
         self.launch(find_self_contacts, self.count,
                     [self.mesh.id, self.faces, self.x, x_start, v, self.rest, self.candidates, self.candidate_count,
-                     reach, mean, other, lookahead, max_speed, self.exclusion, self.side_carry, self.layer, self.face,
+                     reach, mean, other, self.world, lookahead, max_speed, self.exclusion, self.side_carry, self.layer, self.face,
                      self.bary, self.side])
         if self.edge_edge:
             self.launch(find_edge_contacts, self.edges.shape[0],

@@ -63,11 +63,13 @@ def face_normal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), f
 
 
 @wp.func
-def reach_of(i: int, v: wp.array(dtype=wp.vec3), reach: float, mean_velocity: wp.vec3, other_speed: float,
-             lookahead: float, max_speed: float):
-    """reach_i = ``reach`` + ``lookahead`` min(|v_i - ``mean_velocity``| + ``other_speed``, ``max_speed``):
-    what particle i and a triangle moving at ``other_speed`` can close in ``lookahead`` seconds."""
-    radius = reach + lookahead * wp.min(wp.length(v[i] - mean_velocity) + other_speed, max_speed)
+def reach_of(i: int, v: wp.array(dtype=wp.vec3), reach: float, mean_velocity: wp.array(dtype=wp.vec3),
+             other_speed: wp.array(dtype=float), world: wp.array(dtype=wp.int32), lookahead: float, max_speed: float):
+    """reach_i = ``reach`` + ``lookahead`` min(|v_i - v̄_w| + s_w, ``max_speed``), w = ``world[i]``,
+    v̄_w = ``mean_velocity[w]``, s_w = ``other_speed[w]``: what particle i and a triangle of its world
+    moving at s_w can close in ``lookahead`` seconds."""
+    w = world[i]
+    radius = reach + lookahead * wp.min(wp.length(v[i] - mean_velocity[w]) + other_speed[w], max_speed)
     if not wp.isfinite(radius):
         radius = reach
     return radius
@@ -76,7 +78,8 @@ def reach_of(i: int, v: wp.array(dtype=wp.vec3), reach: float, mean_velocity: wp
 @wp.kernel
 def gather_candidates(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
                       v: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), reach: float,
-                      mean_velocity: wp.vec3, other_speed: float, lookahead: float, max_speed: float,
+                      mean_velocity: wp.array(dtype=wp.vec3), other_speed: wp.array(dtype=float),
+                      world: wp.array(dtype=wp.int32), lookahead: float, max_speed: float,
                       most: float, exclusion: float, candidates: wp.array2d(dtype=wp.int32),
                       distances: wp.array2d(dtype=float), count: wp.array(dtype=wp.int32)):
     """Broad phase: the garment triangles within reach_i (``reach_of``) of each particle whose corners
@@ -88,7 +91,7 @@ def gather_candidates(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp.
     count[i] = 0
     if not wp.isfinite(p):  # a blown-up particle: the run is about to stop; do not walk the BVH
         return
-    radius = reach_of(i, v, reach, mean_velocity, other_speed, lookahead, max_speed)
+    radius = reach_of(i, v, reach, mean_velocity, other_speed, world, lookahead, max_speed)
     if radius > most:
         count[i] = -1
         return
@@ -145,7 +148,8 @@ def side_carries(x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), face
 def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
                        x_start: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
                        candidates: wp.array2d(dtype=wp.int32), candidate_count: wp.array(dtype=wp.int32),
-                       reach: float, mean_velocity: wp.vec3, other_speed: float, lookahead: float, max_speed: float,
+                       reach: float, mean_velocity: wp.array(dtype=wp.vec3), other_speed: wp.array(dtype=float),
+                       world: wp.array(dtype=wp.int32), lookahead: float, max_speed: float,
                        exclusion: float, carry: float, layer: wp.array(dtype=wp.int32),
                        contact_face: wp.array(dtype=wp.int32), contact_bary: wp.array(dtype=wp.vec3),
                        contact_side: wp.array(dtype=float)):
@@ -167,7 +171,7 @@ def find_self_contacts(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), x: wp
     i = wp.tid()
     p = x[i]
     best = int(-1)
-    best_distance = reach_of(i, v, reach, mean_velocity, other_speed, lookahead, max_speed)
+    best_distance = reach_of(i, v, reach, mean_velocity, other_speed, world, lookahead, max_speed)
     best_bary = wp.vec3(0.0)
     if candidate_count[i] >= 0:
         for k in range(candidate_count[i]):

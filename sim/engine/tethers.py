@@ -70,31 +70,35 @@ def _surface_graph(model: ClothModel) -> sp.csr_matrix:
 
 
 def surface_tethers(model: ClothModel, per_particle: int = 3, seed: int = 0, chunk: int = 256, scale: float = 1.0):
-    """Surface tethers of ``model``: pairs [T,2] and limits [T] (m), max(rest chord, ``scale`` x graph path)."""
-    n = len(model.rest)
+    """Surface tethers of ``model``: pairs [T,2] and limits [T] (m), max(rest chord, ``scale`` x graph path).
+    Each world of a many-world model (its particles contiguous, no edge between worlds) gets the
+    tethers it would get alone, drawn from its own generator seeded ``seed``."""
     graph = _surface_graph(model)
-    spacing = float(np.median(model.edge_rest))
-    radii = [level * spacing for level in LEVELS]
-    rng = np.random.default_rng(seed)
     pairs, limits = [], []
-    for start in range(0, n, chunk):
-        sources = np.arange(start, min(n, start + chunk))
-        # the graph is symmetric: searched as directed, the same distances without symmetrising it
-        distance = dijkstra(graph, directed=True, indices=sources, limit=1.25 * max(radii))
-        near_rows, near_cols = np.nonzero(distance < np.inf)  # row-major, as the per-ring selections below
-        later = near_cols > sources[near_rows]
-        near_rows, near_cols = near_rows[later], near_cols[later]
-        near = distance[near_rows, near_cols]
-        for r in radii:
-            ring = (near >= r) & (near < 1.25 * r)
-            rows, cols = near_rows[ring], near_cols[ring]
-            # ``per_particle`` of each source's candidates, drawn by sorting on a random key
-            order = np.lexsort((rng.random(len(rows)), rows))
-            rows, cols = rows[order], cols[order]
-            first = np.searchsorted(rows, rows)  # index of each row's first candidate
-            keep = np.arange(len(rows)) - first < per_particle
-            pairs.append(np.stack([sources[rows[keep]], cols[keep]], 1))
-            limits.append(distance[rows[keep], cols[keep]])
+    ends = np.flatnonzero(np.diff(model.world)) + 1
+    for first, last in zip(np.r_[0, ends], np.r_[ends, len(model.rest)]):
+        rng = np.random.default_rng(seed)
+        spacing = float(np.median(model.edge_rest[(model.edges[:, 0] >= first) & (model.edges[:, 0] < last)]))
+        radii = [level * spacing for level in LEVELS]
+        world = graph[first:last, first:last]
+        for start in range(0, last - first, chunk):
+            sources = np.arange(start, min(last - first, start + chunk))
+            # the graph is symmetric: searched as directed, the same distances without symmetrising it
+            distance = dijkstra(world, directed=True, indices=sources, limit=1.25 * max(radii))
+            near_rows, near_cols = np.nonzero(distance < np.inf)  # row-major, as the per-ring selections below
+            later = near_cols > sources[near_rows]
+            near_rows, near_cols = near_rows[later], near_cols[later]
+            near = distance[near_rows, near_cols]
+            for r in radii:
+                ring = (near >= r) & (near < 1.25 * r)
+                rows, cols = near_rows[ring], near_cols[ring]
+                # ``per_particle`` of each source's candidates, drawn by sorting on a random key
+                order = np.lexsort((rng.random(len(rows)), rows))
+                rows, cols = rows[order], cols[order]
+                first_of_row = np.searchsorted(rows, rows)  # index of each row's first candidate
+                keep = np.arange(len(rows)) - first_of_row < per_particle
+                pairs.append(np.stack([sources[rows[keep]], cols[keep]], 1) + first)
+                limits.append(distance[rows[keep], cols[keep]])
     if not pairs:
         return np.zeros((0, 2), np.int64), np.zeros(0)
     pairs = np.concatenate(pairs)

@@ -73,13 +73,14 @@ class Solver:
         self.inverse_mass = float_array(1.0 / model.mass, device)
         self.faces = int_array(model.faces, device)
         self.force = wp.zeros_like(state.x)
-        self.fastest = wp.zeros(1, dtype=float, device=device)  # the largest substep speed this frame (m/s)
+        self.world = int_array(model.world, device)  # each particle's world (job)
+        self.fastest = wp.zeros(model.worlds, dtype=float, device=device)  # each world's largest substep speed this frame (m/s)
         self.wind = Wind(settings.wind, settings.gust, settings.seed)
         thickness = float(model.material["thickness"])
         self.self_contact = SelfContact(
             state.x, exclusion_rest(model), model.faces, model.edges, SELF_SEPARATION * thickness,
             max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * thickness + settings.self_contact_reach),
-            device, model.layer, settings.replay_launches)
+            device, model.layer, settings.replay_launches, model.world)
         self.self_contact.friction_coefficient = float(model.material["friction"])
         self.damping = float(np.exp(-settings.damping / (settings.fps * settings.substeps)))  # per substep
 
@@ -131,7 +132,7 @@ class Solver:
         collider.friction(state_out.x, state_in.x, dt)
         self.after_friction(state_out, dt)
         self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
-        self.launch(kernels.track_fastest, self.count, [state_out.v, self.fastest])
+        self.launch(kernels.track_fastest, self.count, [state_out.v, self.world, self.fastest])
 
     def after_friction(self, state: ClothState, dt: float) -> None:
         """What a solver projects once more after friction moved the contacts (nothing here)."""
