@@ -228,16 +228,18 @@ def layer_order(outfit: Outfit, particles: np.ndarray, body_vertices: np.ndarray
 
 def edges_through(points: np.ndarray, faces: np.ndarray, edges: np.ndarray) -> np.ndarray:
     """Mask [E]: which segments ``edges`` [E,2] (indices into ``points`` [N,3]) pass through a
-    triangle ``faces`` [F,3] (``kernels.edges_through_mesh``)."""
+    triangle ``faces`` [F,3] (``kernels.edges_through_mesh``), on the CPU: a measure of a frame's
+    host copy, whatever device the run steps on."""
     from darts.geometry.warp_runtime import warp
     from sim.engine import kernels
 
     wp = warp()
-    x = wp.array(np.ascontiguousarray(points, np.float32), dtype=wp.vec3)
-    mesh = wp.Mesh(points=x, indices=wp.array(np.ascontiguousarray(faces, np.int32).reshape(-1), dtype=wp.int32))
-    segments = wp.array(np.ascontiguousarray(edges, np.int32), dtype=wp.int32)
-    hits = wp.zeros(len(edges), dtype=wp.int32)
-    wp.launch(kernels.edges_through_mesh, dim=len(edges), inputs=[mesh.id, x, segments, hits])
+    x = wp.array(np.ascontiguousarray(points, np.float32), dtype=wp.vec3, device="cpu")
+    mesh = wp.Mesh(points=x, indices=wp.array(np.ascontiguousarray(faces, np.int32).reshape(-1), dtype=wp.int32,
+                                              device="cpu"))
+    segments = wp.array(np.ascontiguousarray(edges, np.int32), dtype=wp.int32, device="cpu")
+    hits = wp.zeros(len(edges), dtype=wp.int32, device="cpu")
+    wp.launch(kernels.edges_through_mesh, dim=len(edges), inputs=[mesh.id, x, segments, hits], device="cpu")
     return hits.numpy().astype(bool)
 
 

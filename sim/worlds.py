@@ -86,7 +86,8 @@ class WorldBodies:
         return np.concatenate([t.vertices[min(k, h)] + o for t, h, o in zip(self.tracks, self.hold, self.offsets)])
 
 
-def _join(models: list[ClothModel]) -> ClothModel:
+def join_worlds(models: list[ClothModel]) -> ClothModel:
+    """``models`` as the worlds of one model (world k: ``models[k]``)."""
     return join_models(models, [f"world{k}" for k in range(len(models))], worlds=True)
 
 
@@ -99,7 +100,7 @@ def simulate_worlds(worlds: list[World], settings: SimSettings, progress: bool =
 
     models = [job_model(w.garments) for w in worlds]
     tracks = [w.track for w in worlds]
-    model = _join(models)
+    model = join_worlds(models)
     offsets = world_offsets(tracks)
     bodies = WorldBodies(tracks, offsets)
     starts = np.cumsum([0] + [len(m.rest) for m in models])

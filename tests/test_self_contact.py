@@ -311,3 +311,31 @@ def test_edge_faces_gives_each_edge_a_triangle_that_has_it():
     for edge, face in zip(edges[:3], found[:3]):
         assert set(edge) <= set(faces[face])
 
+
+
+def test_the_device_side_speed_statistics_match_the_hosts():
+    """The search's per-world mean velocity and median relative speed, as a CUDA substep computes
+    them (atomics and a log-spaced histogram, run here on the CPU backend) against the host's exact
+    ones: the mean equal, the median rounded up by under one bin (5 %), a non-finite particle and the
+    speed cap respected in both."""
+    vertices, faces, _ = folded_sheet()
+    world = (np.arange(len(vertices)) >= len(vertices) // 3).astype(np.int64)
+    rng = np.random.default_rng(3)
+    velocities = rng.normal(0.0, 0.4, (len(vertices), 3)) + np.where(world[:, None] == 1, [1.2, 0.0, 0.0], 0.0)
+    velocities[5] = np.nan
+    velocities[np.flatnonzero(world == 1)[:3]] *= 200.0  # a few far over the cap
+    x = wp.array(vertices.astype(np.float32), dtype=wp.vec3)
+    v = wp.array(velocities.astype(np.float32), dtype=wp.vec3)
+    contact = SelfContact(x, vertices, faces, unique_edges(faces), 0.002, 0.02, "cpu", world=world)
+    for cap in (50.0, 0.3):
+        contact.host_statistics = True
+        contact.speeds(v, cap)
+        host = contact.mean_velocity.numpy().copy(), contact.other_speed.numpy().copy()
+        contact.host_statistics = False
+        contact.speeds(v, cap)
+        device = contact.mean_velocity.numpy(), contact.other_speed.numpy()
+        assert np.allclose(device[0], host[0], atol=1e-5)
+        assert np.allclose(host[0], [velocities[(world == w) & np.isfinite(velocities).all(1)].mean(0) for w in (0, 1)],
+                           atol=1e-4)
+        assert np.all(device[1] >= host[1] * (1 - 1e-6)) and np.all(device[1] <= np.minimum(host[1] * 1.06, cap))
+        assert np.all(host[1] <= cap)

@@ -24,15 +24,21 @@ import numpy as np
 from darts.geometry.warp_runtime import warp
 from sim.engine.launch import Launcher
 from sim.engine.self_contact_kernels import (
+    SPEED_BINS,
     apply_averaged,
     count_crossings,
     find_edge_contacts,
     find_self_contacts,
     gather_candidates,
+    histogram_medians,
     resolve_edge_contacts,
     resolve_self_contacts,
     self_friction,
+    speed_histogram,
+    world_means,
+    world_velocity_sums,
 )
+from sim.engine.state import on_cpu
 
 wp = warp()
 
@@ -40,7 +46,7 @@ wp = warp()
 MAX_CANDIDATES = 16
 
 
-def _speeds(v, world: np.ndarray, max_speed: float) -> tuple[np.ndarray, np.ndarray]:
+def host_speeds(v, world: np.ndarray, max_speed: float) -> tuple[np.ndarray, np.ndarray]:
     """Per world w (``world`` [P]: each particle's): (the mean velocity v̄_w [W,3], the median of
     |v_i - v̄_w| capped at ``max_speed`` [W]) over its finite velocities ``v`` [P] (a blown-up
     particle, the run about to stop, aside; zeros for a world with none)."""
@@ -124,6 +130,10 @@ class SelfContact:
         worlds = int(self.world_host.max(initial=0)) + 1
         self.mean_velocity = wp.zeros(worlds, dtype=wp.vec3, device=device)  # per world (``_speeds``)
         self.other_speed = wp.zeros(worlds, dtype=float, device=device)
+        self.host_statistics = on_cpu(device)  # ``speeds`` on the host (CPU) or the device (CUDA)
+        self._sums = wp.zeros(worlds, dtype=wp.vec3, device=device)
+        self._counts = wp.zeros(worlds, dtype=wp.int32, device=device)
+        self._bins = wp.zeros((worlds, SPEED_BINS), dtype=wp.int32, device=device)
 
     def search(self, x_start, v, reach: float, lookahead: float, max_speed: float,
                broad: tuple[float, float, float] | None = None) -> None:
@@ -138,9 +148,7 @@ class SelfContact:
         positions the sides are taken from); no particle's reach counts more than ``max_speed`` (m/s)."""
         self.reach = float(reach)
         self.mesh.refit()
-        mean, other = _speeds(v, self.world_host, max_speed)
-        self.mean_velocity.assign(mean)
-        self.other_speed.assign(other)
+        self.speeds(v, max_speed)
         mean, other = self.mean_velocity, self.other_speed
         if broad is not None:
             broad_reach, broad_lookahead, most = broad
@@ -156,6 +164,24 @@ class SelfContact:
                         [self.faces, self.edges, self.vertex_edge_start, self.vertex_edges, self.face, self.x,
                          x_start, self.rest, reach, self.exclusion, self.layer, self.edge_face, self.partner,
                          self.partner_st, self.partner_side])
+
+    def speeds(self, v, max_speed: float) -> None:
+        """Each world's mean velocity and median speed relative to it (capped at ``max_speed``) into
+        ``mean_velocity`` and ``other_speed``: on the host where ``v`` lives there (the CPU backend:
+        ``host_speeds``, exact), else on the device (``speed_histogram``: the median rounded up to its
+        bin's edge, under 5 % high), so that a CUDA substep never waits for the host."""
+        if self.host_statistics:
+            mean, other = host_speeds(v, self.world_host, max_speed)
+            self.mean_velocity.assign(mean)
+            self.other_speed.assign(other)
+            return
+        self._sums.zero_()
+        self._counts.zero_()
+        self._bins.zero_()
+        self.launch(world_velocity_sums, self.count, [v, self.world, self._sums, self._counts])
+        self.launch(world_means, len(self._counts), [self._sums, self._counts, self.mean_velocity])
+        self.launch(speed_histogram, self.count, [v, self.world, self.mean_velocity, max_speed, self._bins])
+        self.launch(histogram_medians, len(self._counts), [self._bins, self._counts, max_speed, self.other_speed])
 
     def launch_key(self) -> tuple:
         """The host values ``resolve`` and ``friction`` launch with (for ``sim.engine.launch.Replay``)."""

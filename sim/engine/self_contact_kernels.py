@@ -499,3 +499,64 @@ def count_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: w
         if segment_hits_triangle(start, direction, 0.998 * length, x[i], x[j], x[k]):
             crossing[e] = 1
             return
+
+
+#: bins of the device-side median relative speed (``speed_histogram``), log-spaced from
+#: ``SPEED_FLOOR`` to the speed cap: each bin is about 5 % wide at the default 50 m/s cap
+SPEED_BINS = 256
+SPEED_FLOOR = 1.0e-4  # m/s
+
+
+@wp.kernel
+def world_velocity_sums(v: wp.array(dtype=wp.vec3), world: wp.array(dtype=wp.int32), sums: wp.array(dtype=wp.vec3),
+                        counts: wp.array(dtype=wp.int32)):
+    """sums[w] += v_i and counts[w] += 1 over the finite velocities of each world w (``world[i]``)."""
+    i = wp.tid()
+    vi = v[i]
+    if wp.isfinite(vi):
+        wp.atomic_add(sums, world[i], vi)
+        wp.atomic_add(counts, world[i], 1)
+
+
+@wp.func
+def speed_bin(speed: float, cap: float):
+    """Bin of ``speed`` among ``SPEED_BINS`` log-spaced bins: 0 holds up to ``SPEED_FLOOR``, bin b >= 1
+    holds (f r^(b-1), f r^b], f = SPEED_FLOOR, r = (cap / f)^(1 / (SPEED_BINS - 1))."""
+    if speed <= SPEED_FLOOR:
+        return 0
+    step = wp.log(cap / SPEED_FLOOR) / float(SPEED_BINS - 1)
+    return wp.clamp(int(wp.ceil(wp.log(speed / SPEED_FLOOR) / step)), 1, SPEED_BINS - 1)
+
+
+@wp.kernel
+def world_means(sums: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.int32), mean: wp.array(dtype=wp.vec3)):
+    """Each world's mean velocity v̄_w = sums[w] / counts[w] (0 without a finite velocity)."""
+    w = wp.tid()
+    mean[w] = sums[w] / float(wp.max(counts[w], 1))
+
+
+@wp.kernel
+def speed_histogram(v: wp.array(dtype=wp.vec3), world: wp.array(dtype=wp.int32), mean: wp.array(dtype=wp.vec3),
+                    cap: float, bins: wp.array2d(dtype=wp.int32)):
+    """The histogram over ``speed_bin`` of each world's |v_i - v̄_w|, its finite velocities only."""
+    i = wp.tid()
+    vi = v[i]
+    if wp.isfinite(vi):
+        wp.atomic_add(bins, world[i], speed_bin(wp.length(vi - mean[world[i]]), cap), 1)
+
+
+@wp.kernel
+def histogram_medians(bins: wp.array2d(dtype=wp.int32), counts: wp.array(dtype=wp.int32), cap: float,
+                      spread: wp.array(dtype=float)):
+    """spread[w] = the upper edge of the bin holding world w's median relative speed, at most ``cap``
+    (0 for a world without a finite velocity): the host's median, rounded up by under one bin."""
+    w = wp.tid()
+    spread[w] = 0.0
+    half = (counts[w] + 1) / 2
+    running = int(0)
+    step = wp.log(cap / SPEED_FLOOR) / float(SPEED_BINS - 1)
+    for b in range(SPEED_BINS):
+        running += bins[w, b]
+        if counts[w] > 0 and running >= half:
+            spread[w] = wp.min(SPEED_FLOOR * wp.exp(step * float(b)), cap)
+            return

@@ -13,6 +13,12 @@ from darts.geometry.warp_runtime import warp
 wp = warp()
 
 
+def on_cpu(device: str) -> bool:
+    """Whether Warp's ``device`` is the CPU backend (the one device check of the engine: a CUDA
+    device takes per-colour launches, graph capture and device-side reductions instead)."""
+    return wp.get_device(device).is_cpu
+
+
 def vec3_array(values: np.ndarray, device: str):
     """``values`` [N,3] as a Warp vec3 array (float32) on ``device``."""
     return wp.array(np.ascontiguousarray(values, np.float32), dtype=wp.vec3, device=device)

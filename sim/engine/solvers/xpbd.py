@@ -17,7 +17,7 @@ from sim.engine.coloring import color_order
 from sim.engine.launch import Launcher, Replay
 from sim.engine.solvers import xpbd_kernels
 from sim.engine.solvers.base import Solver, hinge_rest_cos_sin, hinge_stiffness
-from sim.engine.state import float_array, int_array
+from sim.engine.state import float_array, int_array, on_cpu
 from sim.engine.tethers import tethers
 
 wp = warp()
@@ -30,6 +30,7 @@ class ColoredConstraints:
                  record: bool = True):
         order, self.offsets = color_order(members, particle_count)
         self.device = device
+        self.sequential = on_cpu(device)  # the CPU backend runs a launch's threads in order
         self._launch = Launcher(device, record)
         self.count = len(members)
         members = np.asarray(members, np.int64)
@@ -45,7 +46,7 @@ class ColoredConstraints:
         launch's threads in order, so one launch over the sorted list equals a launch per colour."""
         if self.count == 0:
             return
-        spans = [(0, self.count)] if self.device == "cpu" else zip(self.offsets[:-1], self.offsets[1:])
+        spans = [(0, self.count)] if self.sequential else zip(self.offsets[:-1], self.offsets[1:])
         for start, end in spans:
             self._launch(kernel, int(end - start), [int(start), self.members, *fields, *state])
 
