@@ -296,7 +296,7 @@ def _shape(job: SimJob, dart, body) -> tuple[np.ndarray, np.ndarray]:
     return own, check.betas(job.betas, body.num_betas)
 
 
-def _check_device(device: str) -> None:
+def check_device(device: str) -> None:
     from darts.geometry.warp_runtime import warp
 
     wp = warp()
@@ -397,7 +397,7 @@ def _prepare(job: SimJob, keep_frames: bool, progress: bool) -> _Prepared:
     motion = _load_motion(job)
     body = load_body(job.body)
     if settings.device != "cpu":
-        _check_device(settings.device)
+        check_device(settings.device)
     own, target = _shape(job, dressing.darts[0], body)
     garments = dressing.darts[0]
     if len(dressing.darts) > 1:
@@ -448,17 +448,6 @@ def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Si
     return _finish(prepared, result, keep_frames, progress)
 
 
-def _solver_key(prepared: _Prepared) -> tuple:
-    """What jobs stepped by one solver must share: the settings, the cloth's thickness and friction
-    (one per model), and how the frames are measured."""
-    from sim.outfit import Outfit
-
-    garments = prepared.garments
-    material = garments.model.material if isinstance(garments, Outfit) else garments.material
-    return (json.dumps(asdict(prepared.settings), sort_keys=True), float(material["thickness"]),
-            float(material["friction"]), prepared.winding, prepared.job.measure_every)
-
-
 def simulate_many(jobs: Sequence[SimJob], keep_frames: bool = True, progress: bool = False,
                   worlds: int | None = None) -> list[Simulated]:
     """Run ``jobs`` as many worlds of one solver (``sim.worlds``): their particles, constraints and
@@ -468,33 +457,25 @@ def simulate_many(jobs: Sequence[SimJob], keep_frames: bool = True, progress: bo
     another cloth thickness or friction, other measuring) run in separate solvers, in order of their
     first job; ``worlds``: at most this many jobs per solver (default: all that can share one).
     A job that goes unstable stops there with its good frames, and the others go on."""
-    from sim.worlds import World, simulate_worlds
+    from sim.worlds import World, simulate_grouped
 
     if isinstance(jobs, SimJob) or not isinstance(jobs, Sequence):
         raise check.refuse("jobs", "a list of SimJobs", jobs)
     keep_frames, progress = check.switch(keep_frames, "keep_frames"), check.switch(progress, "progress")
     worlds = check.optional_number(worlds, "worlds", 1, whole=True)
     prepared = [_prepare(job, keep_frames, progress) for job in jobs]
-    groups: dict[tuple, list[int]] = {}
-    for index, p in enumerate(prepared):
-        groups.setdefault(_solver_key(p), []).append(index)
-    done: dict[int, Simulated] = {}
-    for members in groups.values():
-        size = worlds or len(members)
-        for first in range(0, len(members), size):
-            chunk = [prepared[i] for i in members[first:first + size]]
-            writers = [p.writer() for p in chunk]
-            try:
-                results = simulate_worlds([World(p.garments, p.track, p.frames) for p in chunk], chunk[0].settings,
-                                          progress=progress, winding=chunk[0].winding,
-                                          measure_every=chunk[0].job.measure_every)
-            except BaseException:
-                for writer in writers:
-                    if writer is not None:
-                        writer.discard()
-                raise
-            for index, p, writer, result in zip(members[first:first + size], chunk, writers, results):
-                if writer is not None:
-                    writer.close() if result.frames else writer.discard()
-                done[index] = _finish(p, result, keep_frames, progress)
-    return [done[i] for i in range(len(prepared))]
+    writers = [p.writer() for p in prepared]
+    try:
+        results = simulate_grouped([World(p.garments, p.track, p.frames, p.settings, p.winding, p.job.measure_every)
+                                    for p in prepared], size=worlds, progress=progress)
+    except BaseException:
+        for writer in writers:
+            if writer is not None:
+                writer.discard()
+        raise
+    done = []
+    for p, writer, result in zip(prepared, writers, results):
+        if writer is not None:
+            writer.close() if result.frames else writer.discard()
+        done.append(_finish(p, result, keep_frames, progress))
+    return done

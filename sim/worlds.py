@@ -25,8 +25,9 @@ a float32 coordinate is good to 4 micrometres (a single run's, near the origin, 
 """
 from __future__ import annotations
 
+import json
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -43,18 +44,36 @@ WORLD_MARGIN = 1.0
 
 @dataclass
 class World:
-    """One job of a many-world run: its garments (a DART or an ``Outfit``), its body track, and
-    where its recorded frames go (``sink(garment [V,3], body [B,3])``, the job's own world frame)."""
+    """One job of a many-world run: its garments (a DART or an ``Outfit``), its body track, where
+    its recorded frames go (``sink(garment [V,3], body [B,3])``, the job's own world frame), and
+    how it is stepped and measured (``simulate_grouped`` puts jobs that agree on these into one
+    solver; ``simulate_worlds`` is given them)."""
 
     garments: object
     track: BodyTrack
     sink: object = None
+    settings: SimSettings | None = None
+    winding: bool = False
+    measure_every: int = 1
+
+    def solver_key(self) -> tuple:
+        """What jobs stepped by one solver must share: the settings (resolved), the cloth's
+        thickness and friction (one per model), and how the frames are measured."""
+        from sim.engine.solvers import resolved_settings
+        from sim.outfit import Outfit
+
+        material = self.garments.model.material if isinstance(self.garments, Outfit) else self.garments.material
+        settings = resolved_settings(self.settings or SimSettings())
+        return (json.dumps(asdict(settings), sort_keys=True), float(material["thickness"]), float(material["friction"]),
+                self.winding, self.measure_every)
 
 
 def world_offsets(tracks: list[BodyTrack]) -> np.ndarray:
     """[N,3] the shift (m, in x and y only) that puts each track's body, over its whole motion, in
     its own cell of a square grid centred on the origin; a cell is the widest sweep plus
-    ``WORLD_MARGIN`` on a side."""
+    ``WORLD_MARGIN`` on a side. A lone world stays where it is."""
+    if len(tracks) == 1:
+        return np.zeros((1, 3))
     low = np.array([t.vertices[..., :2].min(axis=(0, 1)) for t in tracks])
     high = np.array([t.vertices[..., :2].max(axis=(0, 1)) for t in tracks])
     cell = float((high - low).max()) + WORLD_MARGIN
@@ -87,7 +106,9 @@ class WorldBodies:
 
 
 def join_worlds(models: list[ClothModel]) -> ClothModel:
-    """``models`` as the worlds of one model (world k: ``models[k]``)."""
+    """``models`` as the worlds of one model (world k: ``models[k]``; a lone one as it is)."""
+    if len(models) == 1:
+        return models[0]
     return join_models(models, [f"world{k}" for k in range(len(models))], worlds=True)
 
 
@@ -152,3 +173,22 @@ def _freeze(solver: Simulation, parts: list[slice], positions: np.ndarray) -> No
         x[part], v[part] = positions[part], 0.0
     solver.state.x.assign(x.astype(np.float32))
     solver.state.v.assign(v.astype(np.float32))
+
+
+def simulate_grouped(worlds: list[World], size: int | None = None, progress: bool = False) -> list[RunResult]:
+    """Each world's ``RunResult``, the worlds that can share a solver (``World.solver_key``) stepped
+    together (``simulate_worlds``), at most ``size`` to a solver (default: all that can), groups in
+    order of their first world."""
+    groups: dict[tuple, list[int]] = {}
+    for index, world in enumerate(worlds):
+        groups.setdefault(world.solver_key(), []).append(index)
+    results: dict[int, RunResult] = {}
+    for members in groups.values():
+        step = size or len(members)
+        for first in range(0, len(members), step):
+            chunk = members[first:first + step]
+            lead = worlds[chunk[0]]
+            done = simulate_worlds([worlds[i] for i in chunk], lead.settings or SimSettings(), progress=progress,
+                                   winding=lead.winding, measure_every=lead.measure_every)
+            results.update(zip(chunk, done))
+    return [results[i] for i in range(len(worlds))]

@@ -133,3 +133,20 @@ def test_darts_deform_runs_on_a_sample(made, run_darts, tmp_path):
     assert code == 0, err
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["handle_rmse"] < 0.005 and report["penetration"] <= 0.01
+
+
+def test_garments_draped_together_as_worlds_come_out_as_draped_alone(tmp_path):
+    """``darts dataset make --worlds``: two tops' drapes stepped as worlds of one solver give the
+    garments, lines and rows the jobs give alone (the same drape to a millimetre)."""
+    from darts.jobs import run_group
+    from sim.dataset.make import make_garments
+
+    tops = [i for i in range(40) if CATEGORIES[garment_recipe(0, i).category].family == "top"][:2]
+    jobs = [garment_jobs(tops[-1] + 1, 1, 0, list(CATEGORIES))[i] for i in tops]
+    together = run_group(make_garments, make_garment, jobs, tmp_path / "together")
+    alone = [run_one(make_garment, job, tmp_path / "alone") for job in jobs]
+    for job, a, b in zip(jobs, together, alone):
+        assert a["status"] == b["status"] == "ok" and a["vertices"] == b["vertices"]
+        assert a["drape_penetration"] == pytest.approx(b["drape_penetration"], abs=0.002)
+        draped = [read_npz(tmp_path / where / job.path / "draped.npz")["vertices"] for where in ("together", "alone")]
+        assert np.linalg.norm(draped[0] - draped[1], axis=1).mean() < 1e-3

@@ -164,3 +164,20 @@ def test_jobs_that_cannot_share_a_solver_run_in_their_own_in_order(top_and_skirt
 def test_bad_input_to_simulate_many_is_refused_before_anything_runs(call, problem):
     with pytest.raises(DartsInputError, match=problem):
         call()
+
+
+def test_a_lone_world_is_a_single_run_bit_for_bit(body):
+    """One world through the many-world loop is ``sim.run.simulate`` exactly: same positions, same
+    measures every frame (same machine, same process)."""
+    import darts
+    from sim.body_track import build_body_track
+    from sim.run import simulate
+
+    dart = darts.load_garment("short-skirt")
+    track = build_body_track(body, darts.load_motion("squat"), 30.0, 0.2)
+    track.vertices = track.vertices[:12]
+    alone, world = [], []
+    single = simulate(dart, track, SimSettings(), lambda g, _: alone.append(g), winding=True, measure_every=3)
+    many = simulate_worlds([World(dart, track, lambda g, _: world.append(g))], SimSettings(), winding=True,
+                           measure_every=3)[0]
+    assert len(alone) == 6 and np.array_equal(np.array(alone), np.array(world)) and single.frames == many.frames

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -91,8 +92,8 @@ def summarise(garments: list[dict], samples: list[dict], args) -> dict:
 
 def make(args) -> int:
     from darts.templates.categories import CATEGORIES
-    from sim.dataset.make import GARMENTS, make_garment, render_sample
-    from sim.dataset.posed import make_posed_garment
+    from sim.dataset.make import GARMENTS, make_garment, make_garments, render_sample
+    from sim.dataset.posed import make_posed_garment, make_posed_garments
     from sim.dataset.posed_sample import render_posed_sample
 
     if args.count < 1:
@@ -104,13 +105,22 @@ def make(args) -> int:
         raise DartsInputError(None, f"unknown categor{'y' if len(unknown) == 1 else 'ies'} {', '.join(unknown)} "
                                     f"(one of {', '.join(CATEGORIES)})")
     check_cluster_options(args.workers, args.address)
+    if args.worlds < 1:
+        raise DartsInputError(None, f"--worlds must be >= 1, got {args.worlds}")
+    if args.device != "cpu":
+        from sim.api import check_device
+
+        check_device(args.device)
     out = Path(args.output)
     check_out_dir(out)
     categories = list(dict.fromkeys(args.categories)) if args.categories else list(CATEGORIES)
     with ray_session(args.address, args.workers) as session:
         options = dict(workers=args.workers, retry=args.retry, session=session)
+        one, group = (make_posed_garment, make_posed_garments) if args.posed else (make_garment, make_garments)
         garments = run_jobs(garment_jobs(args.count, args.views, args.seed, categories), out / GARMENTS,
-                            make_posed_garment if args.posed else make_garment, description="garments", **options)
+                            partial(one, device=args.device), description="garments",
+                            group=partial(group, device=args.device) if args.worlds > 1 else None,
+                            group_size=args.worlds, **options)
         samples = run_jobs(sample_jobs(garments, args.views, unseen=not args.posed), out,
                            render_posed_sample if args.posed else render_sample, description="samples", **options)
     summary = summarise(garments, samples, args)
@@ -146,6 +156,11 @@ def add_parser(groups) -> None:
     parser.add_argument("--posed", action="store_true",
                         help="the posed dataset: each garment simulated on a shipped motion up to a random frame, with "
                              "another garment worn with it, pictured by a free camera against clutter (docs/dataset.md)")
+    parser.add_argument("--device", default="cpu", help="Warp device the drapes and posed runs step on (cpu, cuda[:N]; "
+                                                        "default cpu)")
+    parser.add_argument("--worlds", type=int, default=1, metavar="N",
+                        help="garments per worker whose drapes (or posed runs) step together as worlds of one solver "
+                             "(sim.simulate_many; for --device cuda; default 1)")
     parser.add_argument("--address", metavar="ADDR", help="join the Ray cluster at host:port (default: start Ray here)")
     parser.add_argument("--workers", type=int, metavar="N", help="jobs at once (default: one per core)")
     parser.add_argument("--retry", type=int, default=0, metavar="K", help="re-run a job whose worker died, up to K times")

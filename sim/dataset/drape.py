@@ -16,7 +16,7 @@ from darts.body.segmentation import body_segmentation
 from darts.dart.model import Dart
 from sim.body_track import BodyTrack
 from sim.engine.settings import SimSettings
-from sim.run import simulate
+from sim.worlds import World, simulate_grouped
 
 #: The drape's solver per family: chosen when XPBD, before its long-range tethers, let waistbands
 #: creep down the hips and the implicit mass-spring solver held them; kept since, so that a dataset
@@ -42,18 +42,27 @@ def rest_track(body: BodyModel, betas, frames: int, fps: float) -> BodyTrack:
     return BodyTrack(vertices, body.faces, float(fps), 0, np.eye(3), np.zeros(3), np.zeros(3), body_segmentation(body))
 
 
-def drape(dart: Dart, body: BodyModel, family: str, seconds: float = 0.5, fps: float = 30.0) -> Drape:
-    """Let ``dart`` (made for ``body`` in the DART's shape) settle under gravity for ``seconds``."""
-    solver = DRAPE_SOLVER[family]
+def drape_many(garments: list[tuple[Dart, BodyModel, str]], seconds: float = 0.5, fps: float = 30.0,
+               device: str = "cpu", worlds: int | None = None) -> list[Drape]:
+    """Let each ``(dart, body, family)`` (a DART made for ``body`` in the DART's shape) settle under
+    gravity for ``seconds``; those with the same drape solver step together as worlds of one solver
+    (``sim.worlds.simulate_grouped``, at most ``worlds`` to a solver). One garment alone is exactly
+    a single run."""
     frames = max(1, int(round(seconds * fps)))
-    settings = SimSettings(fps=fps, solver=solver, gravity=(0.0, -9.81, 0.0),
-                           ground=False)
-    last = {}
+    kept = [{} for _ in garments]
+    jobs = []
+    for (dart, body, family), last in zip(garments, kept):
+        settings = SimSettings(fps=fps, solver=DRAPE_SOLVER[family], gravity=(0.0, -9.81, 0.0), ground=False,
+                               device=device)
+        jobs.append(World(dart, rest_track(body, dart.body_betas, frames, fps),
+                          lambda garment, _body, last=last: last.update(vertices=garment), settings))
+    results = simulate_grouped(jobs, size=worlds)
+    return [Drape(np.asarray(last.get("vertices", np.asarray(dart.vertices, np.float64)), np.float64), result.stable,
+                  result.message, max((f["penetration"] for f in result.frames), default=0.0), result.wall_seconds)
+            for (dart, _, _), last, result in zip(garments, kept, results)]
 
-    def keep(garment: np.ndarray, _body: np.ndarray) -> None:
-        last["vertices"] = garment
 
-    result = simulate(dart, rest_track(body, dart.body_betas, frames, fps), settings, keep)
-    vertices = last.get("vertices", np.asarray(dart.vertices, np.float64))
-    return Drape(np.asarray(vertices, np.float64), result.stable, result.message,
-                 max((f["penetration"] for f in result.frames), default=0.0), result.wall_seconds)
+def drape(dart: Dart, body: BodyModel, family: str, seconds: float = 0.5, fps: float = 30.0,
+          device: str = "cpu") -> Drape:
+    """Let ``dart`` (made for ``body`` in the DART's shape) settle under gravity for ``seconds``."""
+    return drape_many([(dart, body, family)], seconds, fps, device)[0]

@@ -47,35 +47,48 @@ def _body():
     return load_body(None)
 
 
-def make_garment(job: Job, folder: Path) -> dict:
-    """A garment job (module docstring); returns the times of each stage and what the drape measured."""
+def make_garments(jobs: list[Job], folders: list[Path], device: str = "cpu") -> list[dict]:
+    """Garment jobs (module docstring), their drapes stepped together as worlds of one solver
+    (``sim.dataset.drape.drape_many``, on ``device``); each job's times of each stage and what its
+    drape measured (``drape_s``: the whole group's drape, wall time)."""
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
     from darts.templates.categories import CATEGORIES
-    from sim.dataset.drape import drape
+    from sim.dataset.drape import drape_many
 
-    recipe = garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]))
     body = _body()
-    dart, report, times = recipe_garment(recipe, body)
-    draped = drape(dart, body, CATEGORIES[recipe.category].family, DRAPE_SECONDS)
-    lines = feature_lines(dart, draped.vertices)
-    top = "waist" if "waist" in dart.lines else "neckline"
-    drop = float(np.asarray(dart.vertices, np.float64)[dart.lines[top], 1].mean() - draped.vertices[dart.lines[top], 1].mean())
-    save_dart(dart, folder / "garment.npz")
-    save_npz(folder / "draped.npz", vertices=draped.vertices.astype(np.float32), faces=dart.faces.astype(np.int32),
-             frame=np.array("canonical: Y up, front +Z, metres"))
-    save_npz(folder / "lines.npz", **{name: points.astype(np.float32) for name, points in lines.items()})
-    times["drape_s"] = round(draped.seconds, 3)
-    meta = {**recipe.as_dict(), "vertices": len(dart.vertices), "crdl": {k: report[k] for k in ("arap_energy", "handle_rmse",
-                                                                                                  "penetration", "iterations")},
-            "drape": {"seconds": DRAPE_SECONDS, "stable": draped.stable, "max_penetration": draped.max_penetration,
-                      "message": draped.message}, "times": times}
-    write_json(folder / "meta.json", meta)
-    slid = f"the {top} slid {100 * drop:.1f} cm down in the drape (at most {100 * MAX_DROP:.0f} cm)" if drop > MAX_DROP else ""
-    return {"status": "ok" if draped.stable and not slid else "unstable", "error": draped.message or slid,
-            "category": recipe.category,
-            "split": recipe.split, "vertices": len(dart.vertices), "drape_penetration": draped.max_penetration,
-            "drape_drop": drop, "crdl_handle_rmse": report["handle_rmse"], **times}
+    recipes = [garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"])) for job in jobs]
+    built = [recipe_garment(recipe, body) for recipe in recipes]
+    drapes = drape_many([(dart, body, CATEGORIES[recipe.category].family) for recipe, (dart, _, _) in zip(recipes, built)],
+                        DRAPE_SECONDS, device=device)
+    rows = []
+    for recipe, (dart, report, times), draped, folder in zip(recipes, built, drapes, folders):
+        lines = feature_lines(dart, draped.vertices)
+        top = "waist" if "waist" in dart.lines else "neckline"
+        drop = float(np.asarray(dart.vertices, np.float64)[dart.lines[top], 1].mean()
+                     - draped.vertices[dart.lines[top], 1].mean())
+        save_dart(dart, folder / "garment.npz")
+        save_npz(folder / "draped.npz", vertices=draped.vertices.astype(np.float32), faces=dart.faces.astype(np.int32),
+                 frame=np.array("canonical: Y up, front +Z, metres"))
+        save_npz(folder / "lines.npz", **{name: points.astype(np.float32) for name, points in lines.items()})
+        times["drape_s"] = round(draped.seconds, 3)
+        meta = {**recipe.as_dict(), "vertices": len(dart.vertices),
+                "crdl": {k: report[k] for k in ("arap_energy", "handle_rmse", "penetration", "iterations")},
+                "drape": {"seconds": DRAPE_SECONDS, "stable": draped.stable, "max_penetration": draped.max_penetration,
+                          "message": draped.message}, "times": times}
+        write_json(folder / "meta.json", meta)
+        slid = (f"the {top} slid {100 * drop:.1f} cm down in the drape (at most {100 * MAX_DROP:.0f} cm)"
+                if drop > MAX_DROP else "")
+        rows.append({"status": "ok" if draped.stable and not slid else "unstable", "error": draped.message or slid,
+                     "category": recipe.category, "split": recipe.split, "vertices": len(dart.vertices),
+                     "drape_penetration": draped.max_penetration, "drape_drop": drop,
+                     "crdl_handle_rmse": report["handle_rmse"], **times})
+    return rows
+
+
+def make_garment(job: Job, folder: Path, device: str = "cpu") -> dict:
+    """A garment job alone (``make_garments`` of one)."""
+    return make_garments([job], [folder], device)[0]
 
 
 def line_mask_distances(pixels: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -83,40 +83,60 @@ def carry(rest_body: np.ndarray, posed_body: np.ndarray, faces: np.ndarray, poin
     return np.einsum("nk,nkd->nd", bary, posed) + np.einsum("nij,ni->nj", _frames(posed), local)
 
 
-def make_posed_garment(job: Job, folder: Path) -> dict:
-    """A posed garment job (module docstring); returns the times and what the run measured."""
+def make_posed_garments(jobs: list[Job], folders: list[Path], device: str = "cpu") -> list[dict]:
+    """Posed garment jobs (module docstring), their runs stepped together as worlds of one solver
+    (``sim.worlds.simulate_grouped``, on ``device``; those of one drape solver together); each job's
+    times (``simulate_s``: its group's run, wall time) and what its run measured."""
     from darts.body.io import load_body
+    from darts.motion.amass import load_motion
+    from darts.shipped import resolve_motion
+    from darts.templates.categories import CATEGORIES
+    from sim.body_track import build_body_track
+    from sim.dataset.drape import DRAPE_SOLVER
+    from sim.engine.settings import SimSettings
+    from sim.worlds import World, simulate_grouped
+
+    body = load_body(None)
+    made, worlds = [], []
+    for job in jobs:
+        recipe = garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]))
+        family = CATEGORIES[recipe.category].family
+        posed = posed_recipe(recipe.seed, recipe.index, family)
+        started = time.perf_counter()
+        dart, _, _ = recipe_garment(recipe, body)
+        built = time.perf_counter() - started
+        motion = load_motion(resolve_motion(posed["motion"]))
+        frames = posed["frame"] + 1
+        motion = motion.with_frames(trans=motion.trans[:frames], **{k: v[:frames] for k, v in motion.parts().items()})
+        track = build_body_track(body, motion, 30.0, DRAPE_SECONDS, betas=np.asarray(recipe.betas))
+        last = {}
+        made.append((recipe, posed, dart, track, last, built))
+        worlds.append(World(dart, track, lambda g, b, last=last: last.update(garment=g, body=b),
+                            SimSettings(solver=DRAPE_SOLVER[family], device=device)))
+    started = time.perf_counter()
+    results = simulate_grouped(worlds)
+    simulated = time.perf_counter() - started
+    return [_posed_garment(body, *item, result, simulated, folder) for item, result, folder in zip(made, results, folders)]
+
+
+def make_posed_garment(job: Job, folder: Path, device: str = "cpu") -> dict:
+    """A posed garment job alone (``make_posed_garments`` of one)."""
+    return make_posed_garments([job], [folder], device)[0]
+
+
+def _posed_garment(body, recipe, posed, dart, track, last: dict, built: float, result, simulated: float,
+                   folder: Path) -> dict:
+    """A posed garment's files in ``folder`` from its run's last frame (``last``), and its manifest row."""
     from darts.dart.build import make_dart
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
     from darts.geometry.loops import feature_lines
-    from darts.motion.amass import load_motion
-    from darts.shipped import resolve_motion
-    from darts.templates.categories import CATEGORIES
     from darts.templates.defaults import DATASET_EDGE_LENGTH
-    from sim.body_track import build_body_track
-    from sim.dataset.drape import DRAPE_SOLVER
-    from sim.engine.settings import SimSettings
-    from sim.run import simulate
 
-    recipe = garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]))
-    family = CATEGORIES[recipe.category].family
-    posed = posed_recipe(recipe.seed, recipe.index, family)
-    body = load_body(None)
-    betas = np.asarray(recipe.betas)
-    started = time.perf_counter()
-    dart, _, _ = recipe_garment(recipe, body)
-    built = time.perf_counter()
-    motion = load_motion(resolve_motion(posed["motion"]))
-    frames = posed["frame"] + 1
-    motion = motion.with_frames(trans=motion.trans[:frames], **{k: v[:frames] for k, v in motion.parts().items()})
-    track = build_body_track(body, motion, 30.0, DRAPE_SECONDS, betas=betas)
-    last = {}
-    result = simulate(dart, track, SimSettings(solver=DRAPE_SOLVER[family]), lambda g, b: last.update(garment=g, body=b))
-    simulated = time.perf_counter()
     if not result.stable or "garment" not in last:
         return {"status": "unstable", "error": result.message or "no frame", "category": recipe.category,
                 "split": recipe.split, "motion": posed["motion"], "frame": posed["frame"]}
+    betas = np.asarray(recipe.betas)
     rest_body = body.shaped(betas[None])[0][0].double().numpy()
     posed_body = to_sample_frame(track, last["body"])
     garment = to_sample_frame(track, last["garment"])
@@ -131,7 +151,7 @@ def make_posed_garment(job: Job, folder: Path) -> dict:
              body=posed_body.astype(np.float32), other=other.astype(np.float32), other_faces=np.asarray(other_faces, np.int32),
              joints=joints.astype(np.float32), **{f"lines_{name}": p.astype(np.float32) for name, p in lines.items()},
              frame=np.array("sample frame: the body's canonical frame (Y up, metres) carried by the motion"))
-    times = {"build_s": round(built - started, 3), "simulate_s": round(simulated - built, 3)}
+    times = {"build_s": round(built, 3), "simulate_s": round(simulated, 3)}
     penetration = max((f["penetration"] for f in result.frames), default=0.0)
     meta = {**recipe.as_dict(), **posed, "vertices": len(dart.vertices), "penetration": penetration, "times": times}
     write_json(folder / "meta.json", meta)
