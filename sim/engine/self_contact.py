@@ -27,6 +27,7 @@ from sim.engine.self_contact_kernels import (
     SPEED_BINS,
     apply_averaged,
     count_crossings,
+    crossings_per_world,
     find_edge_contacts,
     find_self_contacts,
     gather_candidates,
@@ -134,6 +135,7 @@ class SelfContact:
         self._sums = wp.zeros(worlds, dtype=wp.vec3, device=device)
         self._counts = wp.zeros(worlds, dtype=wp.int32, device=device)
         self._bins = wp.zeros((worlds, SPEED_BINS), dtype=wp.int32, device=device)
+        self._world_crossings = wp.zeros(worlds, dtype=wp.int32, device=device)
 
     def search(self, x_start, v, reach: float, lookahead: float, max_speed: float,
                broad: tuple[float, float, float] | None = None) -> None:
@@ -210,11 +212,23 @@ class SelfContact:
                                                     self.friction_coefficient, self.layer, x_start, self.x])
         self.pushed.zero_()
 
-    def crossing_edges(self) -> np.ndarray:
-        """Mask [E] of the garment edges that pass through a garment triangle right now."""
+    def _count_crossings(self) -> None:
         self.mesh.refit()
         self._crossing.zero_()
         wp.launch(count_crossings, dim=self.edges.shape[0], inputs=[self.mesh.id, self.faces, self.edges, self.x,
                                                                      self.rest, self.exclusion, self._crossing],
                   device=self.device)
+
+    def crossing_edges(self) -> np.ndarray:
+        """Mask [E] of the garment edges that pass through a garment triangle right now."""
+        self._count_crossings()
         return self._crossing.numpy().astype(bool)
+
+    def crossings(self) -> np.ndarray:
+        """[W] how many edges of each world pass through a garment triangle right now, counted on
+        the device (only W numbers come back to the host)."""
+        self._count_crossings()
+        self._world_crossings.zero_()
+        wp.launch(crossings_per_world, dim=self.edges.shape[0], inputs=[self._crossing, self.edges, self.world,
+                                                                         self._world_crossings], device=self.device)
+        return self._world_crossings.numpy()

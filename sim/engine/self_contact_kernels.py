@@ -501,6 +501,15 @@ def count_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: w
             return
 
 
+@wp.kernel
+def crossings_per_world(crossing: wp.array(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
+                        world: wp.array(dtype=wp.int32), counts: wp.array(dtype=wp.int32)):
+    """counts[w] += 1 for each crossing edge (``count_crossings``) of world w (its first end's)."""
+    e = wp.tid()
+    if crossing[e] != 0:
+        wp.atomic_add(counts, world[edges[e, 0]], 1)
+
+
 #: bins of the device-side median relative speed (``speed_histogram``), log-spaced from
 #: ``SPEED_FLOOR`` to the speed cap: each bin is about 5 % wide at the default 50 m/s cap
 SPEED_BINS = 256

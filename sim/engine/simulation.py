@@ -127,8 +127,7 @@ class Simulation:
         inside, particles = self._inside.numpy(), self._particles
         crossings = None
         if bodies and finite.all():
-            crossings = np.bincount(self.model.world[self.model.edges[:, 0]],
-                                    self.solver.self_contact.crossing_edges(), minlength=self.worlds).astype(int)
+            crossings = self.solver.self_contact.crossings().astype(int)
         if not each_world:  # the model as one: counts summed, speeds the largest
             finite, speed, fastest = finite.min(keepdims=True), speed.max(keepdims=True), fastest.max(keepdims=True)
             inside, particles = inside.sum(0, keepdims=True), particles.sum(keepdims=True)
