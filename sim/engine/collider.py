@@ -71,6 +71,7 @@ class BodyCollider:
         self.offset_host = np.zeros(count) if offset is None else np.asarray(offset, np.float64)
         self.offset = wp.array(self.offset_host.astype(np.float32), dtype=float, device=device)
         self.max_offset = float(self.offset_host.max(initial=0.0))
+        self.end_host = np.ascontiguousarray(body_vertices, np.float32)  # where the body is now, on the host
         self.start = vec3_array(body_vertices, device)
         self.end = vec3_array(body_vertices, device)
         self.points = vec3_array(body_vertices, device)
@@ -107,8 +108,10 @@ class BodyCollider:
         """The body will move from where it is now to ``body_next`` [V,3] during the next frame; the
         search reach covers what its fastest vertex (each world's own) travels between searches."""
         self.start, self.end = self.end, self.start
-        self.end.assign(np.ascontiguousarray(body_next, np.float32))
-        moved = np.linalg.norm(np.asarray(body_next, np.float32) - self.start.numpy(), axis=1)
+        body_next = np.ascontiguousarray(body_next, np.float32)
+        self.end.assign(body_next)
+        moved = np.linalg.norm(body_next - self.end_host, axis=1)  # from the host's copy: no read back
+        self.end_host = body_next
         fastest = [moved.max()] if self.worlds == 1 else [moved[self.body_world == w].max() for w in range(self.worlds)]
         self.speed = np.array([max(float(m) * self.settings.fps, self.settings.max_body_speed) for m in fastest])
 
