@@ -42,10 +42,6 @@ CLEARANCE = CrdlWeights().margin
 #: Local-global iterations per round, and at most for the first (the lines alone, to convergence).
 ROUND_ITERATIONS = 60
 FIRST_ROUND_ITERATIONS = 300
-#: The sliding rounds after the schedule: the lines let go, every vertex held by a weak pull to its
-#: closest point of the mesh (this multiplier), so that the template relaxes along the surface.
-SLIDING_ROUNDS = 10
-SLIDING_MULTIPLIER = 0.01
 
 
 #: How many places a direction's ``worst`` lists.
@@ -112,11 +108,6 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
         _, closest, _ = mesh.query(points, winding=False)
         closest = surface.push_out(closest, CLEARANCE)
         points = layer.solve_local_global(np.concatenate([line_points, closest]), iterations=ROUND_ITERATIONS).vertices
-    sliding = Crdl(garment.vertices, garment.faces, np.arange(count), surface,
-                   handle_weights=np.full(count, SLIDING_MULTIPLIER))
-    for _ in range(SLIDING_ROUNDS):
-        _, closest, _ = mesh.query(points, winding=False)
-        points = sliding.solve_local_global(surface.push_out(closest, CLEARANCE), iterations=ROUND_ITERATIONS).vertices
     if not np.isfinite(points).all():
         raise RuntimeError("the registration produced non-finite vertices")
     dart = replace(template, vertices=points[garment.index].astype(np.float32))
