@@ -266,3 +266,23 @@ def test_an_outfits_seam_setting_says_which_garment_lacks_the_seam(setting, mess
     with pytest.raises(DartsInputError) as error:
         sim.simulate(["long-pants", "long-sleeve-top"], "walk", seams=(setting,), frames=1)
     assert message in str(error.value)
+
+
+def test_the_layer_offsets_on_the_device_are_the_hosts_to_the_bit():
+    """``LayerCover`` (no copy to the host) gives ``covering_offsets``' offsets exactly: three sheets,
+    the outer two partly over the inner ones and partly beyond their cover."""
+    from darts.geometry.warp_runtime import warp
+    from sim.engine.layers import COVER, LayerCover, covering_offsets
+
+    wp = warp()
+    sheets = [_sheet(0.0), _sheet(0.01), _sheet(0.02)]
+    outfit = outfit_model(sheets, ["a", "b", "c"], *SLAB)
+    model = outfit.model
+    points = model.rest.copy()
+    points[model.layer == 2, 0] += np.where(points[model.layer == 2, 0] > 0, 2 * COVER, 0.0)  # half of c off the others
+    x = wp.array(points.astype(np.float32), dtype=wp.vec3, device="cpu")
+    out = wp.zeros(len(points), dtype=float, device="cpu")
+    largest = LayerCover(model, x, "cpu").offsets(out)
+    host = covering_offsets(model, points)
+    assert np.array_equal(out.numpy(), host.astype(np.float32)) and largest == host.max()
+    assert len(np.unique(host[model.layer == 2])) >= 2 and host.max() > 0

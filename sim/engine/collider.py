@@ -68,9 +68,9 @@ class BodyCollider:
         self.thickness, self.friction_coefficient = float(thickness), float(friction)
         self.grip = wp.array(np.asarray(grip, np.float32), dtype=float, device=device)
         self.face_grips = wp.array(gripping_faces(body_faces, parts), dtype=float, device=device)
-        self.offset_host = np.zeros(count) if offset is None else np.asarray(offset, np.float64)
-        self.offset = wp.array(self.offset_host.astype(np.float32), dtype=float, device=device)
-        self.max_offset = float(self.offset_host.max(initial=0.0))
+        offset = np.zeros(count) if offset is None else np.asarray(offset, np.float64)
+        self.offset = wp.array(offset.astype(np.float32), dtype=float, device=device)  # what ``LayerCover`` writes
+        self.max_offset = float(offset.max(initial=0.0))  # m, the largest of them
         self.end_host = np.ascontiguousarray(body_vertices, np.float32)  # where the body is now, on the host
         self.start = vec3_array(body_vertices, device)
         self.end = vec3_array(body_vertices, device)
@@ -97,12 +97,6 @@ class BodyCollider:
         self.body_speed = wp.zeros(self.worlds, dtype=float, device=device)
         self.time = 0.0  # s since the run started, at the start of the current frame
         self.unrefreshed = 0  # substeps since every particle was last searched (the first search takes all)
-
-    def set_offset(self, offset: np.ndarray) -> None:
-        """Each particle's offset off the body beyond the thickness (m) from now on."""
-        self.offset_host = np.asarray(offset, np.float64)
-        self.offset.assign(self.offset_host.astype(np.float32))
-        self.max_offset = float(self.offset_host.max(initial=0.0))
 
     def begin_frame(self, body_next: np.ndarray) -> None:
         """The body will move from where it is now to ``body_next`` [V,3] during the next frame; the
@@ -188,4 +182,4 @@ class BodyCollider:
         if self.contact.face.numpy()[particle] < 0:
             return None
         point, normal = self.contact.point.numpy()[particle], self.contact.normal.numpy()[particle]
-        return self.thickness + float(self.offset_host[particle]) - float(np.dot(x - point, normal))
+        return self.thickness + float(self.offset.numpy()[particle]) - float(np.dot(x - point, normal))

@@ -14,7 +14,7 @@ import numpy as np
 from darts.geometry.warp_runtime import warp
 from sim.engine import kernels
 from sim.engine.collider import BodyCollider
-from sim.engine.layers import covering_offsets
+from sim.engine.layers import LayerCover
 from sim.engine.model import ClothModel
 from sim.engine.settings import SimSettings
 from sim.engine.solvers import resolved_settings, solver_class
@@ -64,6 +64,9 @@ class Simulation:
                                      float(model.material["friction"]), model.grip(settings.waist_friction),
                                      settings, model.body_offset, body_parts, model.world, body_world)
         self.solver = solver_class(settings.solver)(model, self.state, settings)
+        # an outfit's layers kept off the body by the garments under them (on the device)
+        self.layer_cover = (LayerCover(model, self.state.x, device) if settings.layer_offsets and model.layer.max() > 0
+                            else None)
         # The same body surface with winding-number support, refit only to measure.
         self._winding = wp.Mesh(points=self.collider.points, indices=self.collider.mesh.indices,
                                 support_winding_number=True)
@@ -91,9 +94,9 @@ class Simulation:
     def step_frame(self, body_next: np.ndarray) -> None:
         """Advance one frame (1 / fps seconds) while the body moves to ``body_next`` [V,3]; a model of
         several layers first keeps each particle off the body by the garments under it now
-        (``sim.engine.layers.covering_offsets``; ``settings.layer_offsets``)."""
-        if self.settings.layer_offsets and self.model.layer.max() > 0:
-            self.collider.set_offset(covering_offsets(self.model, self.positions()))
+        (``sim.engine.layers.LayerCover``, on the device; ``settings.layer_offsets``)."""
+        if self.layer_cover is not None:
+            self.collider.max_offset = self.layer_cover.offsets(self.collider.offset)
         self.collider.begin_frame(body_next)
         self.solver.fastest.zero_()
         substeps = self.settings.substeps
