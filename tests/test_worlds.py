@@ -181,3 +181,15 @@ def test_a_lone_world_is_a_single_run_bit_for_bit(body):
     many = simulate_worlds([World(dart, track, lambda g, _: world.append(g))], SimSettings(), winding=True,
                            measure_every=3)[0]
     assert len(alone) == 6 and np.array_equal(np.array(alone), np.array(world)) and single.frames == many.frames
+
+
+def test_an_outfit_is_one_world_beside_a_lone_garment():
+    """An outfit (two layers) and a lone garment as two worlds: each comes back with its own
+    garments, the outfit with its layer measures, neither inside its body."""
+    runs = simulate_many([SimJob(["long-pants", "long-sleeve-top"], "walk", frames=2, settle=0.2, winding=True),
+                          SimJob("short-skirt", "walk", frames=2, settle=0.2, winding=True)])
+    outfit, skirt = runs
+    assert outfit.stable and skirt.stable and outfit.garment_names == ["long_pants", "long_sleeve_top"]
+    assert set(outfit.stats["garments"]) == {"long_pants", "long_sleeve_top"} and "garments" not in skirt.stats
+    assert outfit.stats["max_layer_inside"] is not None and outfit.stats["max_penetration"] < 0.01
+    assert skirt.stats["max_penetration"] < 0.01
