@@ -448,6 +448,20 @@ def run_job(job: SimJob, keep_frames: bool = True, progress: bool = False) -> Si
     return _finish(prepared, result, keep_frames, progress)
 
 
+def _check_distinct_outputs(jobs: Sequence[SimJob]) -> None:
+    """No two jobs write the same file (output, stats or preview): a DartsInputError naming it."""
+    seen = {}
+    for index, job in enumerate(jobs):
+        for name in ("output", "stats", "preview"):
+            path = getattr(job, name, None) if isinstance(job, SimJob) else None
+            if path is None:
+                continue
+            key = os.path.abspath(path)
+            if key in seen:
+                raise DartsInputError(path, f"is written by job {seen[key]} and job {index}: give each job its own files")
+            seen[key] = index
+
+
 def simulate_many(jobs: Sequence[SimJob], keep_frames: bool = True, progress: bool = False,
                   worlds: int | None = None) -> list[Simulated]:
     """Run ``jobs`` as many worlds of one solver (``sim.worlds``): their particles, constraints and
@@ -463,9 +477,11 @@ def simulate_many(jobs: Sequence[SimJob], keep_frames: bool = True, progress: bo
         raise check.refuse("jobs", "a list of SimJobs", jobs)
     keep_frames, progress = check.switch(keep_frames, "keep_frames"), check.switch(progress, "progress")
     worlds = check.optional_number(worlds, "worlds", 1, whole=True)
+    _check_distinct_outputs(jobs)
     prepared = [_prepare(job, keep_frames, progress) for job in jobs]
-    writers = [p.writer() for p in prepared]
+    writers = []
     try:
+        writers.extend(p.writer() for p in prepared)
         results = simulate_grouped([World(p.garments, p.track, p.frames, p.settings, p.winding, p.job.measure_every)
                                     for p in prepared], size=worlds, progress=progress)
     except BaseException:

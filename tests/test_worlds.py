@@ -160,6 +160,8 @@ def test_jobs_that_cannot_share_a_solver_run_in_their_own_in_order(top_and_skirt
     (lambda: simulate_many(SimJob("short-skirt", "walk")), "jobs"),
     (lambda: simulate_many([SimJob("short-skirt", "walk")], worlds=0), "worlds"),
     (lambda: simulate_many([SimJob("short-skirt", "walk"), SimJob("short-skirt", "no-such-motion")]), "no-such-motion"),
+    (lambda: simulate_many([SimJob("short-skirt", "walk", stats="s.json"), SimJob("short-pants", "walk", stats="s.json")]),
+     "written by job 0 and job 1"),
 ])
 def test_bad_input_to_simulate_many_is_refused_before_anything_runs(call, problem):
     with pytest.raises(DartsInputError, match=problem):
