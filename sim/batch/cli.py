@@ -61,6 +61,7 @@ def add_parser(groups) -> None:
                         help="re-run a job up to K times when its worker process dies (default 0)")
     parser.add_argument("--worlds", type=int, default=1, metavar="N",
                         help="jobs per worker stepped together as worlds of one solver (sim.simulate_many; "
-                             "for --device cuda, where one GPU holds many garments; default 1: one job at a time)")
+                             "for a GPU, device = \"cuda\" in the SPEC's [sim], where one GPU holds many garments; "
+                             "default 1: one job at a time)")
     parser.add_argument("--list", action="store_true", help="print the jobs and their darts-sim commands, run nothing")
     parser.set_defaults(run=batch)
