@@ -45,9 +45,9 @@ def _garments(names, edge_length, body):
     return [darts.template(name, body=body, edge_length=edge_length) for name in names]
 
 
-def _timed_frames(simulation, bodies, frames: int, wp) -> list[float]:
-    """Step ``frames`` frames (bodies(k) the body at frame k) after two untimed ones; each timed frame's
-    wall seconds, device synchronised around it."""
+def _timed_frames(simulation, bodies, frames: int, wp, after=None) -> list[float]:
+    """Step ``frames`` frames (bodies(k) the body at frame k) after two untimed ones, calling
+    ``after()`` (untimed) after each; each timed frame's wall seconds, device synchronised around it."""
     seconds = []
     for k in range(1, frames + 3):
         wp.synchronize_device(simulation.device)
@@ -56,6 +56,8 @@ def _timed_frames(simulation, bodies, frames: int, wp) -> list[float]:
         wp.synchronize_device(simulation.device)
         if k > 2:
             seconds.append(time.perf_counter() - start)
+        if after is not None:
+            after()
     return seconds
 
 
@@ -87,16 +89,13 @@ def scene(name: str, device: str, frames: int) -> dict:
     frames = min(frames, len(track.vertices) - 3)
     simulation = Simulation(model, track.place_rest(model.rest), track.faces, track.vertices[0], SimSettings(device=device),
                             track.parts)
-    measures, strains, seconds = [], [], []
-    for k in range(1, frames + 3):
-        wp.synchronize_device(device)
-        start = time.perf_counter()
-        simulation.step_frame(track.vertices[k])
-        wp.synchronize_device(device)
-        if k > 2:
-            seconds.append(time.perf_counter() - start)
+    measures, strains = [], []
+
+    def measure():
         measures.append(simulation.measure(winding=True))
         strains.append(float(np.percentile(edge_strain(model, simulation.positions()), 99)))
+
+    seconds = _timed_frames(simulation, lambda k: track.vertices[k], frames, wp, measure)
     return {"scene": name, "device": device, "particles": len(model.rest), "frames": frames,
             "ms_per_frame": 1e3 * float(np.mean(seconds)), "ms_per_frame_median": 1e3 * float(np.median(seconds)),
             **_quality(measures, strains)}

@@ -106,8 +106,8 @@ class BodyCollider:
         self.end.assign(body_next)
         moved = np.linalg.norm(body_next - self.end_host, axis=1)  # from the host's copy: no read back
         self.end_host = body_next
-        fastest = [moved.max()] if self.worlds == 1 else [moved[self.body_world == w].max() for w in range(self.worlds)]
-        self.speed = np.array([max(float(m) * self.settings.fps, self.settings.max_body_speed) for m in fastest])
+        self.speed = np.array([max(float(moved[self.body_world == w].max()) * self.settings.fps,
+                                   self.settings.max_body_speed) for w in range(self.worlds)])
 
     def end_frame(self) -> None:
         """Place the body at the end of the frame just stepped."""

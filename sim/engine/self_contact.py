@@ -56,7 +56,7 @@ def host_speeds(v, world: np.ndarray, max_speed: float) -> tuple[np.ndarray, np.
     mean, spread = np.zeros((count, 3), np.float32), np.zeros(count, np.float32)
     finite = np.isfinite(velocities).all(axis=1)
     for w in range(count):
-        mine = velocities[finite & (world == w)] if count > 1 else velocities[finite]
+        mine = velocities[finite & (world == w)]
         if len(mine):
             mean[w] = mine.mean(axis=0)
             offset = mine - mean[w]
@@ -129,7 +129,7 @@ class SelfContact:
         self.world_host = np.zeros(self.count, np.int64) if world is None else np.asarray(world, np.int64)
         self.world = wp.array(self.world_host.astype(np.int32), dtype=wp.int32, device=device)  # each particle's job
         worlds = int(self.world_host.max(initial=0)) + 1
-        self.mean_velocity = wp.zeros(worlds, dtype=wp.vec3, device=device)  # per world (``_speeds``)
+        self.mean_velocity = wp.zeros(worlds, dtype=wp.vec3, device=device)  # per world (``speeds``)
         self.other_speed = wp.zeros(worlds, dtype=float, device=device)
         self.host_statistics = on_cpu(device)  # ``speeds`` on the host (CPU) or the device (CUDA)
         self._sums = wp.zeros(worlds, dtype=wp.vec3, device=device)

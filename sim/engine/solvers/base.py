@@ -73,7 +73,6 @@ class Solver:
         self.inverse_mass = float_array(1.0 / model.mass, device)
         self.faces = int_array(model.faces, device)
         self.force = wp.zeros_like(state.x)
-        self.world = int_array(model.world, device)  # each particle's world (job)
         self.fastest = wp.zeros(model.worlds, dtype=float, device=device)  # each world's largest substep speed this frame (m/s)
         self.wind = Wind(settings.wind, settings.gust, settings.seed)
         thickness = float(model.material["thickness"])
@@ -82,6 +81,7 @@ class Solver:
             max(SELF_EXCLUSION * float(np.median(model.edge_rest)), SELF_SEPARATION * thickness + settings.self_contact_reach),
             device, model.layer, settings.replay_launches, model.world)
         self.self_contact.friction_coefficient = float(model.material["friction"])
+        self.world = self.self_contact.world  # each particle's world (job), one device array for both
         self.damping = float(np.exp(-settings.damping / (settings.fps * settings.substeps)))  # per substep
 
     def step(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float, time: float,
