@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
-from import_round_trip import edited_garment, recipe  # noqa: E402
+from import_round_trip import edited_garment, recipe, shipped_garment  # noqa: E402
 
 from tests.helpers import seam_offsets  # noqa: E402
 
@@ -47,8 +47,6 @@ def lopsidedness(dart) -> dict:
 
 
 def main() -> None:
-    import darts
-
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=20)
     parser.add_argument("--collars", type=int, default=2)
@@ -60,9 +58,7 @@ def main() -> None:
         draw = recipe(args.seed, k, args.count, args.collars)
         key = (draw["category"], tuple(draw["accessories"]))
         if key not in templates:
-            shipped = darts.template(draw["category"], accessories=draw["accessories"]) if draw["accessories"] \
-                else darts.load_garment(draw["category"])
-            templates[key] = lopsidedness(shipped)
+            templates[key] = lopsidedness(shipped_garment(draw))
         row = {"index": k, "category": draw["category"], "accessories": draw["accessories"], "edits": draw["edits"],
                "template": templates[key], "edited": lopsidedness(edited_garment(draw))}
         rows.append(row)

@@ -71,13 +71,19 @@ def recipe(seed: int, k: int, count: int, collars: int) -> dict:
             "move_m": np.round(rng.uniform(-0.5, 0.5, 3), 3).tolist()}
 
 
-def edited_garment(draw: dict):
-    """The shipped DART of the draw's category (built with its accessories), deformed by its edits."""
+def shipped_garment(draw: dict):
+    """The shipped DART of the draw's category (built with its accessories)."""
     import darts
 
-    garment = darts.template(draw["category"], accessories=draw["accessories"]) if draw["accessories"] \
+    return darts.template(draw["category"], accessories=draw["accessories"]) if draw["accessories"] \
         else darts.load_garment(draw["category"])
-    deformed, _ = darts.deform(garment, edits=[f"{name}={value}" for name, value in draw["edits"].items()])
+
+
+def edited_garment(draw: dict):
+    """``shipped_garment`` deformed by the draw's edits."""
+    import darts
+
+    deformed, _ = darts.deform(shipped_garment(draw), edits=[f"{name}={value}" for name, value in draw["edits"].items()])
     return deformed
 
 
