@@ -237,10 +237,11 @@ def _slide(friction: bool, frames: int = 20) -> float:
 
 def test_layers_hold_each_other_by_friction():
     """Friction 0.4 stops a layer sent sliding at 0.5 m/s within v^2 / (2 mu g) = 3.2 cm; without
-    friction between the layers it slides three times as far (measured 4.4 and 13.5 cm)."""
+    friction between the layers it slides four times as far (measured 3.1 and 13.4 cm; 4.4 cm
+    when the friction was split half and half between the particle and the triangle)."""
     held = _slide(friction=True)
     slid = _slide(friction=False)
-    assert held < 0.055 and slid > 0.10 and slid > 2.5 * held, (held, slid)
+    assert 0.026 < held < 0.038 and slid > 0.10 and slid > 3.0 * held, (held, slid)
 
 
 def test_edges_through_the_other_garment_are_counted():

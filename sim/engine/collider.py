@@ -159,16 +159,20 @@ class BodyCollider:
 
     def resolve(self, x) -> None:
         """Push particles ``thickness`` outside their contact planes (both, in a crease; at most
-        ``contact_push_limit`` a sweep) and above the ground, which has the last word; the pushes add
-        up for ``friction``."""
+        ``contact_push_limit`` a sweep, ``crease_push_limit`` in a crease) and above the ground, which
+        has the last word; the pushes add up for ``friction``."""
         c, s = self.contact, self.second
+        settings = self.settings
         self.launch(collider_kernels.resolve_contacts, self.count,
                     [x, c.point, c.normal, c.face, s.point, s.normal, s.face, self.thickness, self.offset,
-                     self.settings.contact_push_limit, int(self.settings.ground), 0.0, self.body_push, self.ground_push])
+                     settings.contact_push_limit, settings.crease_push_limit, int(settings.ground), 0.0, self.body_push,
+                     self.ground_push])
 
     def launch_key(self) -> tuple:
         """The host values ``resolve`` and ``friction`` launch with (for ``sim.engine.launch.Replay``)."""
-        return self.thickness, self.settings.contact_push_limit, self.settings.ground, self.friction_coefficient
+        settings = self.settings
+        return (self.thickness, settings.contact_push_limit, settings.crease_push_limit, settings.ground,
+                self.friction_coefficient)
 
     def friction(self, x, x_start, dt: float) -> None:
         """Coulomb friction for the substep's contact pushes (then forget them)."""

@@ -213,13 +213,22 @@ def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=w
                      contact_normal: wp.array(dtype=wp.vec3), contact_face: wp.array(dtype=wp.int32),
                      second_point: wp.array(dtype=wp.vec3), second_normal: wp.array(dtype=wp.vec3),
                      second_face: wp.array(dtype=wp.int32),
-                     thickness: float, offset: wp.array(dtype=float), limit: float, ground: int,
+                     thickness: float, offset: wp.array(dtype=float), limit: float, crease_limit: float, ground: int,
                      ground_height: float, body_push: wp.array(dtype=float), ground_push: wp.array(dtype=float)):
     """Move particles to ``thickness`` + their ``offset`` (an outer layer's, over the layers under
     it) outside the body's tangent plane at their contact, and that of their second contact where
     they have one (the smallest move clearing both), but by at most ``limit`` (m) — a particle
     found deep inside the body comes out over several sweeps instead of leaping out in one — and
-    ``thickness`` above the ground plane z = ground_height, adding up how far each was pushed."""
+    ``thickness`` above the ground plane z = ground_height, adding up how far each was pushed.
+
+    In a crease the move is held to ``crease_limit`` (m) a sweep: the move onto both planes grows as
+    1 / (1 + n1.n2) as they turn to face each other, and where an arm presses a sleeve against the
+    torso such moves threw the folded layers through each other. Between two planes that face each
+    other (n1.n2 < FACING: two body parts pressed together) a gap g = (point2 - point1).n1 too
+    narrow for the particle and a layer beside it (g < 2 off + thickness) shrinks the offset off
+    both to off g / (2 off + thickness) (0 where the parts overlap): the squeezed cloth keeps to
+    the middle of the gap, in its own layer's order, instead of being pushed off one part into the
+    other."""
     i = wp.tid()
     p = x[i]
     if contact_face[i] >= 0:
@@ -227,12 +236,19 @@ def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=w
         n1 = contact_normal[i]
         d1 = off - wp.dot(p - contact_point[i], n1)
         move = wp.max(d1, 0.0) * n1
+        cap = limit
         if second_face[i] >= 0:
-            move = two_plane_push(d1, n1, off - wp.dot(p - second_point[i], second_normal[i]), second_normal[i])
+            n2 = second_normal[i]
+            if wp.dot(n1, n2) < FACING:
+                gap = wp.dot(second_point[i] - contact_point[i], n1)
+                off = off * wp.clamp(gap / (2.0 * off + thickness), 0.0, 1.0)
+                d1 = off - wp.dot(p - contact_point[i], n1)
+            move = two_plane_push(d1, n1, off - wp.dot(p - second_point[i], n2), n2)
+            cap = wp.min(limit, crease_limit)
         push = wp.length(move)
-        if push > limit:
-            move = move * (limit / push)
-            push = limit
+        if push > cap:
+            move = move * (cap / push)
+            push = cap
         if push > 0.0:
             p = p + move
             body_push[i] = body_push[i] + push

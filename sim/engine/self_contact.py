@@ -204,12 +204,13 @@ class SelfContact:
                          self.separation, self.reach, self.x, self._delta, self._hits])
         self.launch(apply_averaged, self.count, [self._delta, self._hits, self.x, self.pushed])
 
-    def friction(self, x_start) -> None:
-        """Coulomb friction for the substep's self-contact pushes between layers (``self_friction``),
-        then forget them."""
+    def friction(self, x_start, inverse_mass, body_push) -> None:
+        """Coulomb friction for the substep's self-contact pushes between layers (``self_friction``;
+        ``body_push`` [P]: how far the body pushed each particle this substep), then forget them."""
         if self.friction_coefficient > 0.0 and self.layered:
             self.launch(self_friction, self.count, [self.faces, self.face, self.bary, self.pushed,
-                                                    self.friction_coefficient, self.layer, x_start, self.x])
+                                                    self.friction_coefficient, self.layer, inverse_mass, body_push,
+                                                    x_start, self.x])
         self.pushed.zero_()
 
     def _count_crossings(self) -> None:

@@ -420,13 +420,16 @@ def apply_averaged(delta: wp.array(dtype=wp.vec3), hits: wp.array(dtype=float), 
 @wp.kernel
 def self_friction(faces: wp.array2d(dtype=wp.int32), contact_face: wp.array(dtype=wp.int32),
                   contact_bary: wp.array(dtype=wp.vec3), pushed: wp.array(dtype=float), friction: float,
-                  layer: wp.array(dtype=wp.int32), x_start: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3)):
+                  layer: wp.array(dtype=wp.int32), inverse_mass: wp.array(dtype=float),
+                  body_push: wp.array(dtype=float), x_start: wp.array(dtype=wp.vec3), x: wp.array(dtype=wp.vec3)):
     """Coulomb friction between a particle and its contact triangle on another layer (garment) of
     an outfit (Macklin et al. 2014; a garment's own folds slide freely, as they always have): the
     particle's motion over the substep relative to its triangle point q = sum_k b_k x_k, in the
     triangle's plane, is taken away up to ``friction`` times how far contacts pushed it apart (all
-    of it below that: sticking), half from the particle and half from the triangle's corners by
-    their barycentric weights."""
+    of it below that: sticking), shared as a position constraint shares it: the particle moves
+    -w_i / W of the cut and corner k b_k w_k / W, W = w_i + sum_k b_k^2 w_k (``pinned_weight``: a
+    layer the body holds gives way a tenth as much), so that the relative motion loses exactly the
+    cut."""
     i = wp.tid()
     face = contact_face[i]
     if face < 0 or pushed[i] <= 0.0:
@@ -447,10 +450,15 @@ def self_friction(faces: wp.array2d(dtype=wp.int32), contact_face: wp.array(dtyp
     if length < 1.0e-12:
         return
     cut = wp.min(length, friction * pushed[i]) / length * tangent
-    wp.atomic_sub(x, i, 0.5 * cut)
-    wp.atomic_add(x, a, 0.5 * w[0] * cut)
-    wp.atomic_add(x, b, 0.5 * w[1] * cut)
-    wp.atomic_add(x, c, 0.5 * w[2] * cut)
+    wi = pinned_weight(inverse_mass, body_push, i)
+    wa = pinned_weight(inverse_mass, body_push, a)
+    wb = pinned_weight(inverse_mass, body_push, b)
+    wc = pinned_weight(inverse_mass, body_push, c)
+    total = wi + w[0] * w[0] * wa + w[1] * w[1] * wb + w[2] * w[2] * wc
+    wp.atomic_sub(x, i, (wi / total) * cut)
+    wp.atomic_add(x, a, (w[0] * wa / total) * cut)
+    wp.atomic_add(x, b, (w[1] * wb / total) * cut)
+    wp.atomic_add(x, c, (w[2] * wc / total) * cut)
 
 
 @wp.func

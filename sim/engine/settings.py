@@ -53,6 +53,9 @@ class SimSettings:
     # m a body contact moves a particle at most per sweep: one found deep inside (cloth left in the body's
     # own overlap as it opens) comes out over several sweeps, not at tens of m/s in one
     contact_push_limit: float = 0.01
+    # m the same in a crease (two contact planes): the move onto both grows as the planes turn to face each
+    # other, and such moves threw a sleeve's folds through each other where the arm presses it to the torso
+    crease_push_limit: float = 0.003
     bending_interval: int = 1  # XPBD: substeps between bending sweeps
     self_contact_interval: int = 4  # substeps between the garment's self-contact searches (narrow phase)
     # substeps between the self-contact broad phases (candidate triangles for the searches until the next)
@@ -124,6 +127,7 @@ class SimSettings:
              "contact reaches and max speed must be > 0"),
             (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),
             (self.contact_push_limit > 0, f"contact push limit must be > 0 m, got {self.contact_push_limit}"),
+            (self.crease_push_limit > 0, f"crease push limit must be > 0 m, got {self.crease_push_limit}"),
             (self.contact_refresh_interval >= 1,
              f"contact refresh interval must be >= 1 substep, got {self.contact_refresh_interval}"),
             (self.self_contact_broad_interval >= 1,

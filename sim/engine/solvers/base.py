@@ -117,18 +117,20 @@ class Solver:
             self.self_contact.search(state_in.x, state_in.v, reach, interval * dt, settings.max_speed, broad)
 
     def resolve_contacts(self, state: ClothState, collider: BodyCollider) -> None:
-        """Keep particles off the garment's own triangles (layers the body has pushed this substep
-        staying put), then push them out of the body and above the ground, which has the last word
-        (one sweep each)."""
+        """Push particles out of the body and above the ground, then keep them off the garment's own
+        triangles (one sweep each), the layers the body has pushed this substep staying put. The
+        garment's own contacts have the last word: with the body's last, each layer of a sleeve folded
+        between arm and torso was pushed off its own nearest part, through the layer beside it (the
+        top's walk: 294–308 crossing edges against 159–217, three and two runs 1 µm apart)."""
+        collider.resolve(state.x)
         if self.settings.self_contact:
             self.self_contact.resolve(self.inverse_mass, collider.body_push)
-        collider.resolve(state.x)
 
     def finish(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float) -> None:
         """Friction for the substep's contact pushes (the garment's own layers, then the body), the
         solver's ``after_friction``, then v = (x_out - x_in) / dt."""
         if self.settings.self_contact:
-            self.self_contact.friction(state_in.x)
+            self.self_contact.friction(state_in.x, self.inverse_mass, collider.body_push)
         collider.friction(state_out.x, state_in.x, dt)
         self.after_friction(state_out, dt)
         self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
