@@ -226,8 +226,8 @@ def resolve_contacts(x: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=w
     torso such moves threw the folded layers through each other. Between two planes that face each
     other (n1.n2 < FACING: two body parts pressed together) a gap g = (point2 - point1).n1 too
     narrow for the particle and a layer beside it (g < 2 off + thickness) shrinks the offset off
-    both to off g / (2 off + thickness) (0 where the parts overlap): the squeezed cloth keeps to
-    the middle of the gap, in its own layer's order, instead of being pushed off one part into the
+    both to off g / (2 off + thickness) (0 where the parts overlap): the squeezed cloth stays
+    outside both parts, in the middle of the gap, instead of being pushed off one part into the
     other."""
     i = wp.tid()
     p = x[i]
