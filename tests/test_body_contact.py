@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from darts.dart.model import MATERIALS
 from sim.engine.model import cloth_model
 from sim.engine.settings import SimSettings
 from sim.engine.simulation import Simulation
@@ -15,6 +16,7 @@ from tests.helpers import sheet_dart
 
 SPEED = 10.0  # m/s, downwards: 3.3 cm a substep at 30 fps x 10 substeps
 PLATE = 0.02  # m, thickness of the body: a plate with its top at z = 0
+THICKNESS = MATERIALS["cotton"]["thickness"]  # m, the test sheets' (``sheet_dart``'s material)
 
 
 def _square_sheet(side: int, spacing: float, height: float) -> tuple[np.ndarray, np.ndarray]:
@@ -81,46 +83,41 @@ def _groove() -> tuple[trimesh.Trimesh, np.ndarray]:
     return trimesh.util.concatenate(slabs), normals
 
 
-def _press_into_groove(crease: bool) -> np.ndarray:
-    """One substep (three sweeps: a crease's push is held to ``crease_push_limit`` a sweep) of a small
-    patch placed 4 mm up the groove, within a thickness of both faces; each particle's distance to
-    each face's plane afterwards, in material thicknesses [P,2]."""
+def _press_into_groove(crease: bool, sweeps: int = 3, **settings) -> tuple[np.ndarray, np.ndarray]:
+    """One substep of ``sweeps`` sweeps (three by default: a crease's push is held to
+    ``crease_push_limit`` a sweep; ``settings``: more ``SimSettings``) of a small patch placed 4 mm up
+    the groove, within a thickness of both faces: each particle's distance to each face's plane
+    afterwards, in material thicknesses [P,2], and how far (m) each moved [P]."""
     body, normals = _groove()
     patch = np.array([[0.0003, -0.001, 0.004], [0.0003, 0.001, 0.004], [0.0008, 0.0, 0.0045]])
     model = cloth_model(sheet_dart(patch, np.array([[0, 1, 2]])))
-    settings = SimSettings(substeps=1, iterations=3, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
-                           self_contact=False, crease_contacts=crease)
+    settings = SimSettings(substeps=1, iterations=sweeps, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
+                           self_contact=False, crease_contacts=crease, **settings)
     solver = Simulation(model, model.rest, np.asarray(body.faces), np.asarray(body.vertices), settings)
     assert np.all(model.rest @ normals.T < 0.99 * solver.thickness)  # the patch starts too close to both
     solver.step_frame(np.asarray(body.vertices))
-    return solver.positions() @ normals.T / solver.thickness
+    positions = solver.positions()
+    return positions @ normals.T / solver.thickness, np.linalg.norm(positions - model.rest, axis=1)
 
 
 def test_a_patch_in_a_crease_ends_a_thickness_off_both_faces():
-    assert np.all(np.abs(_press_into_groove(crease=True) - 1.0) < 0.01)
+    distances, _ = _press_into_groove(crease=True)
+    assert np.all(np.abs(distances - 1.0) < 0.01)
 
 
 def test_without_crease_contacts_it_stays_too_close_to_one_face():
     """One plane per particle pushes it off the nearer face into the other's thickness (the test
     above can fail)."""
-    distances = _press_into_groove(crease=False)
+    distances, _ = _press_into_groove(crease=False)
     assert np.all(distances.min(axis=1) < 0.5)
 
 
 def test_a_crease_push_is_held_to_its_limit_a_sweep():
     """The groove's patch needs 3.3-3.7 mm along the crease; one sweep moves it the crease limit."""
-    body, normals = _groove()
-    patch = np.array([[0.0003, -0.001, 0.004], [0.0003, 0.001, 0.004], [0.0008, 0.0, 0.0045]])
-    model = cloth_model(sheet_dart(patch, np.array([[0, 1, 2]])))
-    moved = {}
-    for limit in (0.002, 0.01):
-        settings = SimSettings(substeps=1, iterations=1, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
-                               self_contact=False, crease_push_limit=limit)
-        solver = Simulation(model, model.rest, np.asarray(body.faces), np.asarray(body.vertices), settings)
-        solver.step_frame(np.asarray(body.vertices))
-        moved[limit] = np.linalg.norm(solver.positions() - model.rest, axis=1)
-    assert np.all(np.abs(moved[0.002] - 0.002) < 1e-5)
-    assert np.all(moved[0.01] > 0.003)  # the push it needs, in one sweep
+    _, held = _press_into_groove(crease=True, sweeps=1, crease_push_limit=0.002)
+    _, free = _press_into_groove(crease=True, sweeps=1, crease_push_limit=0.01)
+    assert np.all(np.abs(held - 0.002) < 1e-5)
+    assert np.all(free > 0.003)  # the push it needs, in one sweep
 
 
 def _ride_rising_plate(skin: float, frames: int = 15) -> tuple[np.ndarray, float, list[int]]:
@@ -264,17 +261,11 @@ def test_the_winding_number_tells_the_body_s_own_overlap_apart():
     assert measure.penetration_winding_in_body_overlap == pytest.approx(0.5)
 
 
-def _default_thickness() -> float:
-    """The shipped material's thickness (m), the offset a particle keeps off the body."""
-    patch = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-    return float(cloth_model(sheet_dart(patch, np.array([[0, 1, 2]]))).material["thickness"])
-
-
-def _squeeze(gap: float, crease: bool) -> tuple[np.ndarray, float]:
+def _squeeze(gap: float, crease: bool) -> np.ndarray:
     """A patch 0.2 mm over a slab's top (z = 0) under a second slab whose underside faces it
     ``gap`` (m) above (two body parts pressed together, as an arm on the torso), one substep of
     three sweeps: each particle's distance to the lower and to the upper face [P,2] (m; negative:
-    inside that slab), and the material thickness."""
+    inside that slab)."""
     below = trimesh.creation.box(extents=(0.2, 0.2, 0.04), transform=trimesh.transformations.translation_matrix(
         (0.0, 0.0, -0.02)))
     above = trimesh.creation.box(extents=(0.2, 0.2, 0.04), transform=trimesh.transformations.translation_matrix(
@@ -287,18 +278,18 @@ def _squeeze(gap: float, crease: bool) -> tuple[np.ndarray, float]:
     solver = Simulation(model, model.rest, np.asarray(body.faces), np.asarray(body.vertices), settings)
     solver.step_frame(np.asarray(body.vertices))
     z = solver.positions()[:, 2]
-    return np.stack([z, gap - z], axis=1), solver.thickness
+    return np.stack([z, gap - z], axis=1)
 
 
 def test_cloth_squeezed_between_two_parts_keeps_out_of_both():
     """Half a thickness t between two parts: the offset off both shrinks from t to t g / (2 t + t) =
     g / 3, so the patch ends outside both, a third of the gap off the nearer."""
-    distances, thickness = _squeeze(0.5 * _default_thickness(), crease=True)
+    distances = _squeeze(0.5 * THICKNESS, crease=True)
     gap = distances.sum(axis=1)
     assert np.all(distances > 0)
     assert np.allclose(distances[:, 0], gap / 3, atol=2e-5)
 
 
 def test_without_crease_contacts_squeezed_cloth_is_pushed_into_the_other_part():
-    distances, thickness = _squeeze(0.5 * _default_thickness(), crease=False)
-    assert np.allclose(distances[:, 0], thickness, atol=1e-5) and np.all(distances[:, 1] < 0)
+    distances = _squeeze(0.5 * THICKNESS, crease=False)
+    assert np.allclose(distances[:, 0], THICKNESS, atol=1e-5) and np.all(distances[:, 1] < 0)
