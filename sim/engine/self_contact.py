@@ -16,6 +16,12 @@ two layers whose edges slide through each other between vertices. All correction
 averaged per particle before they are applied. Between two garments of an outfit the side is not
 remembered but known, outer over inner (every garment's triangles face away from the body), so a
 particle or edge that has passed through another garment is pulled back out.
+
+What the contacts let through anyway (a fold pushed past the search's reach is forgotten, and one
+found on the wrong side is then held there) is untangled: the edges that pass through a garment
+triangle, found at each broad phase, and those triangles are moved apart a little every substep, the
+way that shortens the contour where the garment cuts itself (intersection contour minimisation,
+Volino and Magnenat-Thalmann 2006), until the cut is gone.
 """
 from __future__ import annotations
 
@@ -26,8 +32,8 @@ from sim.engine.launch import Launcher
 from sim.engine.self_contact_kernels import (
     SPEED_BINS,
     apply_averaged,
-    count_crossings,
     crossings_per_world,
+    find_crossings,
     find_edge_contacts,
     find_self_contacts,
     gather_candidates,
@@ -36,6 +42,7 @@ from sim.engine.self_contact_kernels import (
     resolve_self_contacts,
     self_friction,
     speed_histogram,
+    untangle_crossings,
     world_means,
     world_velocity_sums,
 )
@@ -65,8 +72,10 @@ def host_speeds(v, world: np.ndarray, max_speed: float) -> tuple[np.ndarray, np.
 
 
 def edge_faces(edges: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """[E]: a triangle of ``faces`` [F,3] that has each edge of ``edges`` [E,2] (-1 where none does),
-    by the undirected edge keys of ``darts.geometry.mesh.half_edges`` (half-edge h is face h // 3's)."""
+    """[E,2]: the triangles of ``faces`` [F,3] on the two sides of each edge of ``edges`` [E,2]
+    (-1 where there is none: the second of a boundary edge, both of a pair that is no triangle's
+    edge), by the undirected edge keys of ``darts.geometry.mesh.half_edges`` (half-edge h is face
+    h // 3's)."""
     from darts.geometry.mesh import half_edges
 
     faces = np.asarray(faces, np.int64)
@@ -75,9 +84,14 @@ def edge_faces(edges: np.ndarray, faces: np.ndarray) -> np.ndarray:
     low, high = np.sort(np.asarray(edges, np.int64), axis=1).T
     wanted = low * base + high
     order = np.argsort(key, kind="stable")
-    at = np.minimum(np.searchsorted(key[order], wanted), len(order) - 1)
-    found = (high < base) & (key[order][at] == wanted)
-    return np.where(found, order[at] // 3, -1).astype(np.int32)
+    sorted_keys = key[order]
+    first = np.searchsorted(sorted_keys, wanted, side="left")
+    found = np.full((len(wanted), 2), -1, np.int32)
+    for side in range(2):
+        at = np.minimum(first + side, len(order) - 1)
+        hit = (high < base) & (first + side < len(order)) & (sorted_keys[at] == wanted)
+        found[:, side] = np.where(hit, order[at] // 3, -1)
+    return found
 
 
 def vertex_edge_lists(edges: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
@@ -112,7 +126,9 @@ class SelfContact:
         self.bary = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self.side = wp.zeros(self.count, dtype=float, device=device)
         start, incident = vertex_edge_lists(edges, self.count)
-        self.edge_face = wp.array(edge_faces(edges, faces), dtype=wp.int32, device=device)
+        sides = edge_faces(edges, faces)
+        self.edge_face = wp.array(np.ascontiguousarray(sides[:, 0]), dtype=wp.int32, device=device)
+        self.edge_sides = wp.array(sides, dtype=wp.int32, device=device)
         self.vertex_edge_start = wp.array(start, dtype=wp.int32, device=device)
         self.vertex_edges = wp.array(incident, dtype=wp.int32, device=device)
         self.partner = wp.full(self.edges.shape[0], -1, dtype=wp.int32, device=device)
@@ -120,7 +136,8 @@ class SelfContact:
         self.partner_side = wp.zeros(self.edges.shape[0], dtype=float, device=device)
         self._delta = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self._hits = wp.zeros(self.count, dtype=float, device=device)
-        self._crossing = wp.zeros(self.edges.shape[0], dtype=wp.int32, device=device)
+        self.crossed = wp.full(self.edges.shape[0], -1, dtype=wp.int32, device=device)  # the triangle each edge passes through
+        self.untangled = wp.zeros(self.count, dtype=float, device=device)  # m the untangling moved each particle
         self.pushed = wp.zeros(self.count, dtype=float, device=device)  # m pushed apart this substep
         self.friction_coefficient = 0.0  # Coulomb friction between layers (the solver sets the material's)
         self.layer = wp.array(np.zeros(self.count, np.int32) if layer is None else np.asarray(layer, np.int32),
@@ -213,23 +230,35 @@ class SelfContact:
                                                     x_start, self.x])
         self.pushed.zero_()
 
-    def _count_crossings(self) -> None:
+    def find_crossings(self) -> None:
+        """Refit the BVH and find, for each garment edge, a garment triangle it passes through
+        (``crossed``; ``find_crossings``)."""
         self.mesh.refit()
-        self._crossing.zero_()
-        wp.launch(count_crossings, dim=self.edges.shape[0], inputs=[self.mesh.id, self.faces, self.edges, self.x,
-                                                                     self.rest, self.exclusion, self._crossing],
+        wp.launch(find_crossings, dim=self.edges.shape[0], inputs=[self.mesh.id, self.faces, self.edges, self.x,
+                                                                    self.rest, self.exclusion, self.crossed],
                   device=self.device)
+
+    def untangle(self, x, inverse_mass, step: float) -> None:
+        """Move (in positions ``x`` [P]) each edge found crossing a triangle and that triangle apart by up to ``step`` m along
+        the triangle's normal, the way that shrinks the contour where the garment cuts itself
+        (``untangle_crossings``), each particle by the mean of its moves (how far: ``untangled``)."""
+        self._delta.zero_()
+        self._hits.zero_()
+        self.launch(untangle_crossings, self.edges.shape[0],
+                    [self.faces, self.edges, self.edge_sides, self.crossed, self.layer, inverse_mass, step, x,
+                     self._delta, self._hits])
+        self.launch(apply_averaged, self.count, [self._delta, self._hits, x, self.untangled])
 
     def crossing_edges(self) -> np.ndarray:
         """Mask [E] of the garment edges that pass through a garment triangle right now."""
-        self._count_crossings()
-        return self._crossing.numpy().astype(bool)
+        self.find_crossings()
+        return self.crossed.numpy() >= 0
 
     def crossings(self) -> np.ndarray:
         """[W] how many edges of each world pass through a garment triangle right now, counted on
         the device (only W numbers come back to the host)."""
-        self._count_crossings()
+        self.find_crossings()
         self._world_crossings.zero_()
-        wp.launch(crossings_per_world, dim=self.edges.shape[0], inputs=[self._crossing, self.edges, self.world,
+        wp.launch(crossings_per_world, dim=self.edges.shape[0], inputs=[self.crossed, self.edges, self.world,
                                                                          self._world_crossings], device=self.device)
         return self._world_crossings.numpy()

@@ -484,13 +484,15 @@ def segment_hits_triangle(origin: wp.vec3, direction: wp.vec3, length: float, a:
 
 
 @wp.kernel
-def count_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
-                    x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), exclusion: float,
-                    crossing: wp.array(dtype=wp.int32)):
-    """Edges of the garment that pass through one of its triangles (a self-intersection), leaving out
-    triangles within ``exclusion`` of the edge's ends on the rest garment (its neighbours, never
-    contacts); each edge is shortened by 0.1 % at both ends."""
+def find_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
+                   x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), exclusion: float,
+                   crossed: wp.array(dtype=wp.int32)):
+    """Edges of the garment that pass through one of its triangles (a self-intersection): crossed[e]
+    is the first such triangle the BVH gives (-1: none), leaving out triangles within ``exclusion``
+    of the edge's ends on the rest garment (its neighbours, never contacts); each edge is shortened
+    by 0.1 % at both ends."""
     e = wp.tid()
+    crossed[e] = -1
     a, b = edges[e, 0], edges[e, 1]
     d = x[b] - x[a]
     length = wp.length(d)
@@ -505,16 +507,111 @@ def count_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: w
         if near_on_rest(rest, a, i, j, k, exclusion) or near_on_rest(rest, b, i, j, k, exclusion):
             continue
         if segment_hits_triangle(start, direction, 0.998 * length, x[i], x[j], x[k]):
-            crossing[e] = 1
+            crossed[e] = face
             return
+
+
+@wp.func
+def contour_bend(faces: wp.array2d(dtype=wp.int32), edge_sides: wp.array2d(dtype=wp.int32),
+                 x: wp.array(dtype=wp.vec3), e: int, a: int, b: int, n: wp.vec3):
+    """w = q_1 + q_2: the unit directions in which the intersection contour of edge ab's surface with
+    a plane of normal ``n`` leaves the crossing point, along the line where each triangle on a side
+    of the edge meets the plane (n_f x n), into that triangle (towards its corner off the edge). The
+    contour's length near the point falls fastest as the point moves along w: w is 0 where the
+    contour runs straight through and points into its bend."""
+    along = wp.normalize(x[b] - x[a])
+    w = wp.vec3(0.0)
+    for side in range(2):
+        f = edge_sides[e, side]
+        if f < 0:
+            continue
+        o = faces[f, 0] + faces[f, 1] + faces[f, 2] - a - b  # the corner off the edge
+        line = wp.cross(face_normal(x, faces, f), n)
+        size = wp.length(line)
+        if size < 1.0e-6:
+            continue
+        inward = x[o] - x[a]
+        inward = inward - wp.dot(inward, along) * along
+        line = line / size
+        if wp.dot(line, inward) < 0.0:
+            line = -line
+        w += line
+    return w
+
+
+@wp.kernel
+def untangle_crossings(faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
+                       edge_sides: wp.array2d(dtype=wp.int32), crossed: wp.array(dtype=wp.int32),
+                       layer: wp.array(dtype=wp.int32), inverse_mass: wp.array(dtype=float), step: float,
+                       x: wp.array(dtype=wp.vec3), delta: wp.array(dtype=wp.vec3), hits: wp.array(dtype=float)):
+    """Intersection contour minimisation (after Volino and Magnenat-Thalmann 2006): edge ab that
+    passes through triangle t (``crossed``, unit normal n) at p = lerp(a, b, s) is moved against t
+    along n so that the contour where the two surfaces cut each other shrinks. p stays on the edge
+    and in t's plane, so moving the edge's surface by d against t moves p by
+    J d = d - (d . n) / (e . n) e (e = the edge's unit direction); the contour's length falls along
+    w (``contour_bend``), so along J^T w, whose part along n is nu = -(e . w) / (e . n). The edge's
+    point p minus t's point (barycentrics beta) is moved along n by m = step clamp(nu, -1, 1),
+    shared as a position constraint shares it (particle k by c_k w_k m / sum_j c_j^2 w_j, c the
+    weights 1 - s, s and -beta, w the inverse masses; none further than |m|), into ``delta``
+    (``hits`` counts the moves of each particle). A contour that runs straight
+    (w = 0) is left to its bends, and a pair that no longer crosses is left alone. Between two
+    garments of an outfit (``layer``) the way is known: the outer garment's surface moves out (along
+    the normal of an inner triangle, against an outer one) by the whole step."""
+    e = wp.tid()
+    t = crossed[e]
+    if t < 0:
+        return
+    a, b = edges[e, 0], edges[e, 1]
+    i, j, k = faces[t, 0], faces[t, 1], faces[t, 2]
+    normal = wp.cross(x[j] - x[i], x[k] - x[i])
+    if wp.length(normal) < 1.0e-12:
+        return
+    n = wp.normalize(normal)
+    height_a = wp.dot(x[a] - x[i], n)
+    height_b = wp.dot(x[b] - x[i], n)
+    if height_a * height_b >= 0.0:
+        return
+    s = height_a / (height_a - height_b)
+    p = wp.lerp(x[a], x[b], s)
+    beta = closest_on_triangle(p, x[i], x[j], x[k])
+    if wp.length(p - (beta[0] * x[i] + beta[1] * x[j] + beta[2] * x[k])) > 0.01 * wp.length(x[b] - x[a]):
+        return  # the crossing has moved on to another triangle: the next search finds it
+    along = wp.normalize(x[b] - x[a])
+    across = wp.dot(along, n)
+    if wp.abs(across) < 1.0e-6:
+        return
+    nu = -wp.dot(along, contour_bend(faces, edge_sides, x, e, a, b, n)) / across
+    move = step * wp.clamp(nu, -1.0, 1.0)
+    if layer[a] != layer[i]:  # two garments of an outfit: the outer one goes out (triangles face outwards)
+        move = wp.where(layer[a] > layer[i], step, -step)
+    if move == 0.0:
+        return
+    wa = inverse_mass[a]
+    wb = inverse_mass[b]
+    weight = (1.0 - s) * (1.0 - s) * wa + s * s * wb
+    for c in range(3):
+        weight += beta[c] * beta[c] * inverse_mass[faces[t, c]]
+    if weight <= 0.0:
+        return
+    share = move / weight
+    limit = wp.abs(move)  # no particle moves further than the pair (a light corner under a heavy one would)
+    wp.atomic_add(delta, a, wp.clamp((1.0 - s) * wa * share, -limit, limit) * n)
+    wp.atomic_add(delta, b, wp.clamp(s * wb * share, -limit, limit) * n)
+    wp.atomic_add(hits, a, 1.0)
+    wp.atomic_add(hits, b, 1.0)
+    for c in range(3):
+        corner = faces[t, c]
+        wp.atomic_add(delta, corner,
+                      -wp.clamp(beta[c] * inverse_mass[corner] * share, -limit, limit) * n)
+        wp.atomic_add(hits, corner, 1.0)
 
 
 @wp.kernel
 def crossings_per_world(crossing: wp.array(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                         world: wp.array(dtype=wp.int32), counts: wp.array(dtype=wp.int32)):
-    """counts[w] += 1 for each crossing edge (``count_crossings``) of world w (its first end's)."""
+    """counts[w] += 1 for each crossing edge (``find_crossings``) of world w (its first end's)."""
     e = wp.tid()
-    if crossing[e] != 0:
+    if crossing[e] >= 0:
         wp.atomic_add(counts, world[edges[e, 0]], 1)
 
 

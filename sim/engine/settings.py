@@ -66,6 +66,10 @@ class SimSettings:
     # m searched beyond the separation for the garment's self-contacts, plus what each particle and the
     # garment's fast particles travel until the next search (``SelfContact.search``)
     self_contact_reach: float = 0.002
+    # m a substep moves an edge that passes through the garment and the triangle it passes through apart, the way
+    # that shrinks the contour where the garment cuts itself (``SelfContact.untangle``; the edges found at each
+    # self-contact broad phase); 0: a cut the contacts let through stays until it opens by itself
+    untangle_step: float = 0.001
     max_body_speed: float = 5.0  # m/s the search reach allows for at least (more when the body is faster)
     max_speed: float = _user(50.0, "m/s; a faster particle stops the run as unstable")
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep

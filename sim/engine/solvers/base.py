@@ -100,7 +100,8 @@ class Solver:
     def find_contacts(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float,
                       substep: int) -> None:
         """The body's contacts for this substep (``BodyCollider.update``) and, every
-        ``self_contact_interval`` substeps, the garment's self-contacts."""
+        ``self_contact_interval`` substeps, the garment's self-contacts; with each broad phase, the
+        edges that pass through the garment (``SelfContact.find_crossings``, for ``untangle``)."""
         collider.update(state_out.x, state_in.x, substep, dt)
         settings = self.settings
         interval, every = settings.self_contact_interval, settings.self_contact_broad_interval
@@ -115,6 +116,8 @@ class Solver:
                 fall = 0.5 * float(np.linalg.norm(settings.gravity)) * lookahead ** 2
                 broad = (reach + fall, lookahead, reach + fall + settings.self_contact_list_reach)
             self.self_contact.search(state_in.x, state_in.v, reach, interval * dt, settings.max_speed, broad)
+            if broad is not None and settings.untangle_step > 0.0:
+                self.self_contact.find_crossings()
 
     def resolve_contacts(self, state: ClothState, collider: BodyCollider) -> None:
         """Push particles out of the body and above the ground, then keep them off the garment's own
@@ -128,10 +131,14 @@ class Solver:
 
     def finish(self, state_in: ClothState, state_out: ClothState, collider: BodyCollider, dt: float) -> None:
         """Friction for the substep's contact pushes (the garment's own layers, then the body), the
-        solver's ``after_friction``, then v = (x_out - x_in) / dt."""
+        garment's cuts through itself shrunk (``SelfContact.untangle``, edges found at each broad
+        phase: twice a frame at the defaults), the solver's ``after_friction`` (the seams see the
+        untangling's moves), then v = (x_out - x_in) / dt."""
         if self.settings.self_contact:
             self.self_contact.friction(state_in.x, self.inverse_mass, collider.body_push)
         collider.friction(state_out.x, state_in.x, dt)
+        if self.settings.self_contact and self.settings.untangle_step > 0.0:
+            self.self_contact.untangle(state_out.x, self.inverse_mass, self.settings.untangle_step)
         self.after_friction(state_out, dt)
         self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
         self.launch(kernels.track_fastest, self.count, [state_out.v, self.world, self.fastest])
