@@ -327,6 +327,19 @@ def _grid(n: int, spacing: float, origin: np.ndarray, height) -> tuple[np.ndarra
     return vertices, faces
 
 
+def _bump_through_sheet() -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """A flat 20 cm sheet at z = 0 and, under it, a sheet 4 mm down with a 16 mm bump at the middle
+    whose top pokes 12 mm through the first (a closed cut). Returns vertices [V,3] (the flat sheet's
+    first), faces, rest positions (the sheets 1 m apart: never neighbours) and the flat sheet's count."""
+    top, top_faces = _grid(21, 0.01, np.zeros(2), lambda x, y: np.zeros_like(x))
+    bump, bump_faces = _grid(21, 0.01, np.array([0.0037, 0.0041]),
+                             lambda x, y: -0.004 + 0.016 * np.exp(-((x - 0.1) ** 2 + (y - 0.1) ** 2) / (2 * 0.02 ** 2)))
+    vertices = np.concatenate([top, bump])
+    faces = np.concatenate([top_faces, bump_faces + len(top)])
+    rest = vertices + np.where(np.arange(len(vertices)) < len(top), 0.0, 1.0)[:, None] * [1.0, 0.0, 0.0]
+    return vertices, faces, rest, len(top)
+
+
 def test_untangling_pulls_a_bump_back_through_the_sheet_it_pokes_through():
     """A sheet with a 12 mm bump lies 4 mm under another sheet, the bump through it (a closed cut, as
     where a fold has been pushed through the layer over it and the contacts hold it there). Edges
@@ -334,12 +347,7 @@ def test_untangling_pulls_a_bump_back_through_the_sheet_it_pokes_through():
     gone, the whole bump ends under the sheet it went through, and the sheets away from the cut
     (over 6 cm from the bump's axis) have not moved."""
     centre = np.array([0.1, 0.1])
-    top, top_faces = _grid(21, 0.01, np.zeros(2), lambda x, y: np.zeros_like(x))
-    bump, bump_faces = _grid(21, 0.01, np.array([0.0037, 0.0041]),
-                             lambda x, y: -0.004 + 0.016 * np.exp(-((x - 0.1) ** 2 + (y - 0.1) ** 2) / (2 * 0.02 ** 2)))
-    vertices = np.concatenate([top, bump])
-    faces = np.concatenate([top_faces, bump_faces + len(top)])
-    rest = vertices + np.where(np.arange(len(vertices)) < len(top), 0.0, 1.0)[:, None] * [1.0, 0.0, 0.0]
+    vertices, faces, rest, flat = _bump_through_sheet()
     x = wp.array(vertices.astype(np.float32), dtype=wp.vec3, device="cpu")
     contact = SelfContact(x, rest, faces, unique_edges(faces), 0.0, 0.015, "cpu")
     inverse_mass = wp.array(np.ones(len(vertices), np.float32), dtype=float, device="cpu")
@@ -350,11 +358,28 @@ def test_untangling_pulls_a_bump_back_through_the_sheet_it_pokes_through():
         contact.untangle(x, inverse_mass, 0.0005)
     assert contact.crossing_edges().sum() == 0
     after = x.numpy()
-    top_surface = LinearNDInterpolator(after[:len(top), :2], after[:len(top), 2])
-    height_over_top = after[len(top):, 2] - top_surface(after[len(top):, :2])
+    top_surface = LinearNDInterpolator(after[:flat, :2], after[:flat, 2])
+    height_over_top = after[flat:, 2] - top_surface(after[flat:, :2])
     assert np.nanmax(height_over_top) < 0.0
     far = np.linalg.norm(vertices[:, :2] - centre, axis=1) > 0.06
     assert np.abs(after[far] - vertices[far]).max() < 1e-6
+
+
+def test_the_screened_crossing_search_finds_what_the_full_one_finds():
+    """The untangling's search skips an edge shorter than twice the candidate lists' reach whose
+    two ends have empty lists (nothing within that reach to pass through): on the bump poked through
+    a sheet it finds exactly the full search's crossing edges, with lists made at a 6 mm reach."""
+    vertices, faces, rest, flat = _bump_through_sheet()
+    x = wp.array(vertices.astype(np.float32), dtype=wp.vec3, device="cpu")
+    contact = SelfContact(x, rest, faces, unique_edges(faces), 0.001, 0.015, "cpu")
+    still = wp.zeros(len(vertices), dtype=wp.vec3, device="cpu")
+    contact.search(x, still, 0.003, 0.0, 50.0, broad=(0.006, 0.0, 1.0))
+    lists = contact.candidate_count.numpy()
+    assert 0 < (lists == 0).sum() < len(lists)
+    contact.find_crossings(screen=0.006)
+    screened = contact.crossed.numpy().copy()
+    contact.find_crossings()
+    assert (screened >= 0).sum() > 20 and np.array_equal(screened, contact.crossed.numpy())
 
 
 def test_the_device_side_speed_statistics_match_the_hosts():

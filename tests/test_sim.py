@@ -173,11 +173,12 @@ def test_the_tops_sleeves_folded_at_the_armpits_do_not_cross_themselves(body):
     body's contacts last in every sweep and creases pushed a centimetre a sweep, each fold was pushed
     off its own nearest body part through the fold beside it: 123-127 crossing edges over the first
     30 walk frames (runs started 1 um apart); with the garment's own contacts last, creases held to
-    3 mm a sweep and the facing gap shared, 38-50."""
+    3 mm a sweep and the facing gap shared, 38-50; with the cuts untangled too, 24 (38 on the same
+    track without)."""
     track = build_body_track(body, _walk(60), 30.0, 0.5)  # the walk's first second: 30 frames at 30 fps
     result = simulate(load_dart(GARMENTS_DIR / "short-sleeve-top.npz"), track, SimSettings())
     assert result.stable and len(result.frames) == 30, result.message
-    assert max(frame["self_intersections"] for frame in result.frames) <= 80
+    assert max(frame["self_intersections"] for frame in result.frames) <= 32
 
 
 def test_repulsive_opens_towards_its_rest_length_and_partial_opens_only_unsprung(body):

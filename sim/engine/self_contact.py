@@ -230,12 +230,14 @@ class SelfContact:
                                                     x_start, self.x])
         self.pushed.zero_()
 
-    def find_crossings(self) -> None:
+    def find_crossings(self, screen: float = 0.0) -> None:
         """Refit the BVH and find, for each garment edge, a garment triangle it passes through
-        (``crossed``; ``find_crossings``)."""
+        (``crossed``; ``find_crossings``); with ``screen`` (m, the reach of the candidate lists just
+        made) only edges near another layer are tested (about a fifth of the cost on the top's walk)."""
         self.mesh.refit()
         wp.launch(find_crossings, dim=self.edges.shape[0], inputs=[self.mesh.id, self.faces, self.edges, self.x,
-                                                                    self.rest, self.exclusion, self.crossed],
+                                                                    self.rest, self.exclusion, self.candidate_count,
+                                                                    float(screen), self.crossed],
                   device=self.device)
 
     def untangle(self, x, inverse_mass, step: float) -> None:

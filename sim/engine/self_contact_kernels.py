@@ -486,17 +486,21 @@ def segment_hits_triangle(origin: wp.vec3, direction: wp.vec3, length: float, a:
 @wp.kernel
 def find_crossings(mesh: wp.uint64, faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                    x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), exclusion: float,
-                   crossed: wp.array(dtype=wp.int32)):
+                   candidate_count: wp.array(dtype=wp.int32), screen: float, crossed: wp.array(dtype=wp.int32)):
     """Edges of the garment that pass through one of its triangles (a self-intersection): crossed[e]
     is the first such triangle the BVH gives (-1: none), leaving out triangles within ``exclusion``
     of the edge's ends on the rest garment (its neighbours, never contacts); each edge is shortened
-    by 0.1 % at both ends."""
+    by 0.1 % at both ends. With ``screen`` > 0 (the reach of the candidate lists just made), an edge
+    shorter than 2 ``screen`` whose two ends have empty lists is not tested: the triangle it passes
+    through would lie within ``screen`` of its nearer end, in that end's list or behind 16 nearer."""
     e = wp.tid()
     crossed[e] = -1
     a, b = edges[e, 0], edges[e, 1]
     d = x[b] - x[a]
     length = wp.length(d)
     if length < 1.0e-9:
+        return
+    if screen > 0.0 and candidate_count[a] == 0 and candidate_count[b] == 0 and length < 2.0 * screen:
         return
     direction = d / length
     start = x[a] + 0.001 * d

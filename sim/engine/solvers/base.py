@@ -117,7 +117,7 @@ class Solver:
                 broad = (reach + fall, lookahead, reach + fall + settings.self_contact_list_reach)
             self.self_contact.search(state_in.x, state_in.v, reach, interval * dt, settings.max_speed, broad)
             if broad is not None and settings.untangle_step > 0.0:
-                self.self_contact.find_crossings()
+                self.self_contact.find_crossings(screen=broad[0])
 
     def resolve_contacts(self, state: ClothState, collider: BodyCollider) -> None:
         """Push particles out of the body and above the ground, then keep them off the garment's own
