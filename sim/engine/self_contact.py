@@ -137,7 +137,7 @@ class SelfContact:
         self._delta = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self._hits = wp.zeros(self.count, dtype=float, device=device)
         self.crossed = wp.full(self.edges.shape[0], -1, dtype=wp.int32, device=device)  # the triangle each edge passes through
-        self.untangled = wp.zeros(self.count, dtype=float, device=device)  # m the untangling moved each particle
+        self.untangled = wp.zeros(self.count, dtype=float, device=device)  # m the untangling moved each particle in all
         self.pushed = wp.zeros(self.count, dtype=float, device=device)  # m pushed apart this substep
         self.friction_coefficient = 0.0  # Coulomb friction between layers (the solver sets the material's)
         self.layer = wp.array(np.zeros(self.count, np.int32) if layer is None else np.asarray(layer, np.int32),
@@ -241,9 +241,10 @@ class SelfContact:
                   device=self.device)
 
     def untangle(self, x, inverse_mass, step: float) -> None:
-        """Move (in positions ``x`` [P]) each edge found crossing a triangle and that triangle apart by up to ``step`` m along
+        """Move each edge found crossing a triangle and that triangle apart by up to ``step`` m along
         the triangle's normal, the way that shrinks the contour where the garment cuts itself
-        (``untangle_crossings``), each particle by the mean of its moves (how far: ``untangled``)."""
+        (``untangle_crossings``; ``x`` [P]: the positions moved), each particle by the mean of its
+        moves (``untangled`` adds up how far, for diagnosis)."""
         self._delta.zero_()
         self._hits.zero_()
         self.launch(untangle_crossings, self.edges.shape[0],
