@@ -35,6 +35,17 @@ def write_classic_amass_120fps(source_path, path) -> None:
              mocap_framerate=np.array(120.00004577))
 
 
+def grid_sheet(n: int, spacing: float, origin, height) -> tuple[np.ndarray, np.ndarray]:
+    """An n x n grid of Z-up vertices at ``origin`` + (i, j) ``spacing`` (vertex i n + j), z =
+    height(x, y), and its faces: each square split along its (i, j)-(i + 1, j + 1) diagonal, normals up."""
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    xy = np.asarray(origin, float) + spacing * np.stack([i.ravel(), j.ravel()], axis=1)
+    vertices = np.column_stack([xy, height(xy[:, 0], xy[:, 1])])
+    a = (i[:-1, :-1] * n + j[:-1, :-1]).ravel()
+    faces = np.concatenate([np.stack([a, a + n, a + n + 1], 1), np.stack([a, a + n + 1, a + 1], 1)])
+    return vertices, faces
+
+
 def sheet_dart(vertices: np.ndarray, faces: np.ndarray) -> Dart:
     """A one-panel DART of a bare mesh (no lines, no seams), for solver tests."""
     empty = np.zeros((0, 2), np.int32)

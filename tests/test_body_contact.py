@@ -12,7 +12,7 @@ from darts.dart.model import MATERIALS
 from sim.engine.model import cloth_model
 from sim.engine.settings import SimSettings
 from sim.engine.simulation import Simulation
-from tests.helpers import sheet_dart
+from tests.helpers import grid_sheet, sheet_dart
 
 SPEED = 10.0  # m/s, downwards: 3.3 cm a substep at 30 fps x 10 substeps
 PLATE = 0.02  # m, thickness of the body: a plate with its top at z = 0
@@ -21,14 +21,8 @@ THICKNESS = MATERIALS["cotton"]["thickness"]  # m, the test sheets' (``sheet_dar
 
 def _square_sheet(side: int, spacing: float, height: float) -> tuple[np.ndarray, np.ndarray]:
     """A horizontal square grid of side x side vertices, centred over the origin at ``height``."""
-    t = (np.arange(side) - (side - 1) / 2) * spacing
-    vertices = np.array([[a, b, height] for a in t for b in t])
-    faces = []
-    for i in range(side - 1):
-        for j in range(side - 1):
-            a, b, c, d = i * side + j, i * side + j + 1, (i + 1) * side + j, (i + 1) * side + j + 1
-            faces += [[a, c, d], [a, d, b]]
-    return vertices, np.array(faces)
+    corner = -(side - 1) / 2 * spacing
+    return grid_sheet(side, spacing, (corner, corner), lambda x, y: np.full_like(x, height))
 
 
 def _throw_at_plate(height: float, continuous: bool, frames: int = 6) -> tuple[np.ndarray, float]:

@@ -12,7 +12,7 @@ from sim.engine.model import cloth_model
 from sim.engine.self_contact import SelfContact
 from sim.engine.settings import SimSettings
 from sim.engine.simulation import Simulation
-from tests.helpers import sheet_dart
+from tests.helpers import grid_sheet, sheet_dart
 
 wp = warp()
 
@@ -137,15 +137,9 @@ def test_without_edge_contacts_the_strip_passes_through():
 def _two_sheets(gap: float):
     """Two 10 cm square sheets of 1 cm quads, the upper one ``gap`` above the lower (Z up); on the
     rest garment they lie 1 m apart, so neither is the other's neighbour. Positions, rest, faces, edges."""
-    y, x = np.meshgrid(np.arange(11) * 0.01, np.arange(11) * 0.01, indexing="ij")
-    grid = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1)
-    quads = [(i * 11 + j, i * 11 + j + 1, (i + 1) * 11 + j, (i + 1) * 11 + j + 1) for i in range(10) for j in range(10)]
-    sheet = np.array([f for a, b, c, d in quads for f in ((a, b, d), (a, d, c))])
-    faces = np.vstack([sheet, sheet + len(grid)])
-    edges = unique_edges(faces)
-    positions = np.vstack([grid, grid + [0.0, 0.0, gap]])
-    rest = np.vstack([grid, grid + [0.0, 0.0, 1.0]])
-    return positions, rest, faces, edges
+    vertices, faces = grid_sheet(11, 0.01, (0.0, 0.0), lambda x, y: np.zeros_like(x))
+    positions, rest, faces = _apart_on_rest((vertices, faces), (vertices + [0.0, 0.0, gap], faces))
+    return positions, rest, faces, unique_edges(faces)
 
 
 def _upper_contacts(speed: float, lookahead: float) -> int:
@@ -317,27 +311,24 @@ def test_edge_faces_gives_each_edge_the_triangles_on_its_two_sides():
             assert set(edge) <= set(faces[face])
 
 
-def _grid(n: int, spacing: float, origin: np.ndarray, height) -> tuple[np.ndarray, np.ndarray]:
-    """An n x n grid of Z-up vertices at ``origin`` + (i, j) ``spacing``, z = height(x, y), and its faces."""
-    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    xy = origin + spacing * np.stack([i.ravel(), j.ravel()], axis=1)
-    vertices = np.column_stack([xy, height(xy[:, 0], xy[:, 1])])
-    a = (i[:-1, :-1] * n + j[:-1, :-1]).ravel()
-    faces = np.concatenate([np.stack([a, a + n, a + n + 1], 1), np.stack([a, a + n + 1, a + 1], 1)])
-    return vertices, faces
+def _apart_on_rest(lower: tuple[np.ndarray, np.ndarray], upper: tuple[np.ndarray, np.ndarray]):
+    """Two sheets (vertices, faces) as one garment whose rest shape holds them 1 m apart, so neither is
+    the other's neighbour: positions [V,3] (the lower sheet's first), rest, faces."""
+    (low, low_faces), (high, high_faces) = lower, upper
+    positions = np.concatenate([low, high])
+    rest = np.concatenate([low, high + [0.0, 0.0, 1.0]])
+    return positions, rest, np.concatenate([low_faces, high_faces + len(low)])
 
 
 def _bump_through_sheet() -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """A flat 20 cm sheet at z = 0 and, under it, a sheet 4 mm down with a 16 mm bump at the middle
     whose top pokes 12 mm through the first (a closed cut). Returns vertices [V,3] (the flat sheet's
     first), faces, rest positions (the sheets 1 m apart: never neighbours) and the flat sheet's count."""
-    top, top_faces = _grid(21, 0.01, np.zeros(2), lambda x, y: np.zeros_like(x))
-    bump, bump_faces = _grid(21, 0.01, np.array([0.0037, 0.0041]),
-                             lambda x, y: -0.004 + 0.016 * np.exp(-((x - 0.1) ** 2 + (y - 0.1) ** 2) / (2 * 0.02 ** 2)))
-    vertices = np.concatenate([top, bump])
-    faces = np.concatenate([top_faces, bump_faces + len(top)])
-    rest = vertices + np.where(np.arange(len(vertices)) < len(top), 0.0, 1.0)[:, None] * [1.0, 0.0, 0.0]
-    return vertices, faces, rest, len(top)
+    top = grid_sheet(21, 0.01, (0.0, 0.0), lambda x, y: np.zeros_like(x))
+    bump = grid_sheet(21, 0.01, (0.0037, 0.0041),
+                      lambda x, y: -0.004 + 0.016 * np.exp(-((x - 0.1) ** 2 + (y - 0.1) ** 2) / (2 * 0.02 ** 2)))
+    vertices, rest, faces = _apart_on_rest(top, bump)
+    return vertices, faces, rest, len(top[0])
 
 
 def test_untangling_pulls_a_bump_back_through_the_sheet_it_pokes_through():

@@ -137,7 +137,7 @@ class SelfContact:
         self._delta = wp.zeros(self.count, dtype=wp.vec3, device=device)
         self._hits = wp.zeros(self.count, dtype=float, device=device)
         self.crossed = wp.full(self.edges.shape[0], -1, dtype=wp.int32, device=device)  # the triangle each edge passes through
-        self.untangled = wp.zeros(self.count, dtype=float, device=device)  # m the untangling moved each particle in all
+        self._untangle_tally = wp.zeros(self.count, dtype=float, device=device)  # apply_averaged's tally; unread
         self.pushed = wp.zeros(self.count, dtype=float, device=device)  # m pushed apart this substep
         self.friction_coefficient = 0.0  # Coulomb friction between layers (the solver sets the material's)
         self.layer = wp.array(np.zeros(self.count, np.int32) if layer is None else np.asarray(layer, np.int32),
@@ -244,13 +244,13 @@ class SelfContact:
         """Move each edge found crossing a triangle and that triangle apart by up to ``step`` m along
         the triangle's normal, the way that shrinks the contour where the garment cuts itself
         (``untangle_crossings``; ``x`` [P]: the positions moved), each particle by the mean of its
-        moves (``untangled`` adds up how far, for diagnosis)."""
+        moves."""
         self._delta.zero_()
         self._hits.zero_()
         self.launch(untangle_crossings, self.edges.shape[0],
                     [self.faces, self.edges, self.edge_sides, self.crossed, self.layer, inverse_mass, step, x,
                      self._delta, self._hits])
-        self.launch(apply_averaged, self.count, [self._delta, self._hits, x, self.untangled])
+        self.launch(apply_averaged, self.count, [self._delta, self._hits, x, self._untangle_tally])
 
     def crossing_edges(self) -> np.ndarray:
         """Mask [E] of the garment edges that pass through a garment triangle right now."""
