@@ -46,17 +46,19 @@ def fit_surface(dart: Dart, body: BodyModel) -> FitSurface:
     return FitSurface(shaped[0].double().detach().numpy(), body.faces, hull)
 
 
-def handle_targets(garment: WeldedGarment, targets: dict[str, np.ndarray],
-                   match=correspond) -> tuple[np.ndarray, np.ndarray]:
+def handle_targets(garment: WeldedGarment, targets: dict[str, np.ndarray], match=correspond,
+                   vertices: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(handle vertex indices [H], matched target points [H,3]) over every line with a target, each
-    line's vertices matched to its target loop by ``match`` (arc length, ``correspond``, unless told)."""
+    line's vertices (at ``vertices`` [V,3], the garment's rest shape unless given) matched to its
+    target loop by ``match`` (arc length, ``correspond``, unless told)."""
     import torch
 
+    vertices = garment.vertices if vertices is None else vertices
     handles, points = [], []
     for name, loop in garment.lines.items():
         if name not in targets:
             continue
-        pairing = match(garment.vertices[loop], targets[name])
+        pairing = match(vertices[loop], targets[name])
         handles.append(loop)
         points.append(pairing.points(torch.as_tensor(targets[name])).numpy())
     if not handles:

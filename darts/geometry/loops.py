@@ -42,13 +42,19 @@ def resample_loop(points: np.ndarray, count: int, away_from: np.ndarray) -> np.n
     return (1 - t) * closed[k] + t * closed[k + 1]
 
 
-def distance_to_loop(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
-    """[N] distance of each of ``points`` [N,3] to the closed polyline ``loop`` [K,3]: the nearest
-    of each segment's clamped projections."""
-    a, b = loop, np.roll(loop, -1, 0)
-    ab = b - a
+def closest_on_loop(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """[N,3]: the point of the closed polyline ``loop`` [K,3] nearest each of ``points`` [N,3] (the
+    nearest of each segment's clamped projections)."""
+    a, ab = loop, np.roll(loop, -1, 0) - loop
     t = np.clip(((points[:, None] - a[None]) * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0, 1)
-    return np.linalg.norm(points[:, None] - (a[None] + t[..., None] * ab[None]), axis=-1).min(1)
+    projected = a[None] + t[..., None] * ab[None]
+    nearest = np.linalg.norm(points[:, None] - projected, axis=-1).argmin(1)
+    return projected[np.arange(len(points)), nearest]
+
+
+def distance_to_loop(points: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """[N] distance of each of ``points`` [N,3] to the closed polyline ``loop`` [K,3]."""
+    return np.linalg.norm(points - closest_on_loop(points, loop), axis=1)
 
 
 def feature_lines(dart, vertices: np.ndarray) -> dict[str, np.ndarray]:
