@@ -259,7 +259,8 @@ def test_an_edited_remeshed_garment_in_millimetres_comes_back_at_its_size_and_pl
     longer (the CRDL), remeshed isotropically, turned 20 deg, moved and written as GLB in
     millimetres (a node scale of 0.001), imports with its category guessed, its size kept (a fitted
     scale made it 7 % smaller) and within 2 mm of the edited garment both ways on average, every
-    seam vertex within 2.2 mm of the original's seams. All loops placing it lifted it 13 mm (the
+    seam vertex within 2.2 mm of the original's seams, and the report and the output say the edit
+    (the hem 4.5 cm, the cuffs 7.5 cm longer, within 3 mm). All loops placing it lifted it 13 mm (the
     longer hem and cuffs pulled towards the template's); a first registration round that was not
     the lines' edit left seams 4.5 mm off, one that pulled the lines to the file's loops by angle
     2.9 mm (the fitted edit: 1.6 mm)."""
@@ -279,6 +280,9 @@ def test_an_edited_remeshed_garment_in_millimetres_comes_back_at_its_size_and_pl
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["category"] == "short-sleeve-top" and report["scale"] == 1.0, report["category"]
     assert report["mesh_to_dart"]["p95_mm"] > 0.1 and "--own-mesh keeps the file's own surface" in out
+    edits = report["line_edits"]  # the registration's fitted edit: the hem 4.5 cm and the cuffs 7.5 cm longer
+    assert abs(edits["hem"]["length_cm"] - 4.5) < 0.3 and abs(edits["left_cuff"]["length_cm"] - 7.5) < 0.3
+    assert all(abs(edit["width_cm"]) < 0.3 for edit in edits.values()) and "left_cuff +7.5 / " in out, (edits, out)
     measured = round_trip_distances(load_dart(tmp_path / "g.npz"), original)
     for way in ("imported_to_original", "original_to_imported"):
         assert measured[way]["mean_mm"] <= 2.0 and measured[way]["p95_mm"] <= 5.0, measured
@@ -446,21 +450,24 @@ def test_lines_are_matched_by_angle_around_their_centre_and_by_arc_length_when_n
 
 def test_an_openings_edit_is_recovered_from_the_loop_alone():
     """A hem shortened 8.3 cm and let out 4.6 cm (``edited_loop``: the two edits ``darts.deform``
-    makes), resampled unevenly, reversed and starting elsewhere: ``fitted_edit_loop`` finds the edit
-    and gives back the edited template loop vertex for vertex (within 0.2 mm), where the target's points
-    closest to the template's lie over 5 mm from their own."""
-    from darts.crdl.targets import edited_loop, fitted_edit_loop
+    makes), resampled unevenly, reversed and starting elsewhere: ``fit_loop_edit`` finds both
+    amounts within 0.2 mm, and the template loop edited by them is the edited loop vertex for vertex
+    (within 0.2 mm), where the target's points closest to the template's lie over 5 mm from their own."""
+    from darts.crdl.targets import edited_loop, fit_loop_edit
     from darts.geometry.loops import closest_on_loop
 
     def ellipse(phases):
         return np.stack([0.09 * np.cos(phases) + 0.1, np.full(len(phases), -0.9), 0.06 * np.sin(phases)], 1)
 
+    def edit(points, length, width):
+        return edited_loop(edited_loop(points, "length", length, garment_centre), "width", width, garment_centre)
+
     garment_centre = np.array([0.0, -0.3, 0.0])
     template = ellipse(np.linspace(0, 2 * np.pi, 26, endpoint=False))
-    expected = edited_loop(edited_loop(template, "length", -0.083, garment_centre), "width", 0.046, garment_centre)
-    dense = np.linspace(0, 2 * np.pi, 400, endpoint=False)
-    curve = edited_loop(edited_loop(ellipse(dense), "length", -0.083, garment_centre), "width", 0.046, garment_centre)
+    expected = edit(template, -0.083, 0.046)
+    curve = edit(ellipse(np.linspace(0, 2 * np.pi, 400, endpoint=False)), -0.083, 0.046)
     target = np.roll(curve[np.sort(np.random.default_rng(5).choice(400, 150, replace=False))][::-1], 40, axis=0)
-    fitted = fitted_edit_loop(template, target, garment_centre)
-    assert np.abs(fitted - expected).max() < 2e-4
+    length, width = fit_loop_edit(template, target, garment_centre)
+    assert abs(length + 0.083) < 2e-4 and abs(width - 0.046) < 2e-4, (length, width)
+    assert np.abs(edit(template, length, width) - expected).max() < 2e-4
     assert np.linalg.norm(closest_on_loop(template, target) - expected, axis=1).max() > 5e-3

@@ -120,6 +120,8 @@ def import_mesh(args) -> int:
     places = ", ".join(f"{100 * p['share']:.0f} % over the {p['body_part'].replace('_', ' ')}" for p in far["worst_body_parts"])
     print(f"the mesh's farthest 5 % from the {fitted} ({far['p95_mm']:.1f} mm and beyond, up to {far['max_mm']:.1f} mm): "
           f"{places}; nearest {fitted} panel {far['worst'][0]['panel']}")
+    edits = ", ".join(f"{name} {edit['length_cm']:+.1f} / {edit['width_cm']:+.1f}" for name, edit in report["line_edits"].items())
+    print(f"its openings against the template's (cm, longer / wider, as `darts deform --edit` takes them): {edits}")
     for note in [] if quiet else report["notes"]:
         print(f"note: {note}")
     if not args.own_mesh and far["p95_mm"] > OWN_MESH_HINT_MM:

@@ -68,13 +68,14 @@ def edited_loop(points: np.ndarray, kind: str, amount: float, garment_centre: np
     return points + amount * radial / np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
 
 
-def fitted_edit_loop(points: np.ndarray, target: np.ndarray, garment_centre: np.ndarray, rounds: int = 30) -> np.ndarray:
-    """The template loop ``points`` [K,3] edited (``edited_loop``: a "length" a, then a "width" b)
-    as far as best takes it onto the closed polyline ``target`` [M,3]: the edit an opening of an
-    edited garment came from. The edited loop is x_k + a n + b r_k (n the loop's axis, r_k the unit
-    radial direction of x_k in its plane), linear in (a, b): alternately each edited point's closest
-    point c_k on the target and the least-squares (a, b) of sum_k |x_k + a n + b r_k - c_k|^2 (an
-    ICP with two unknowns, ``rounds`` times)."""
+def fit_loop_edit(points: np.ndarray, target: np.ndarray, garment_centre: np.ndarray,
+                  rounds: int = 30) -> tuple[float, float]:
+    """(length, width), metres: the edit of the template loop ``points`` [K,3] (``edited_loop``: a
+    "length" a, then a "width" b) that best takes it onto the closed polyline ``target`` [M,3] — the
+    edit an opening of an edited garment came from. The edited loop is x_k + a n + b r_k (n the
+    loop's axis, r_k the unit radial direction of x_k in its plane), linear in (a, b): alternately
+    each edited point's closest point c_k on the target and the least-squares (a, b) of
+    sum_k |x_k + a n + b r_k - c_k|^2 (an ICP with two unknowns, ``rounds`` times)."""
     points = np.asarray(points, np.float64)
     centre, axis = loop_frame(points, garment_centre)
     radial = points - centre
@@ -85,7 +86,7 @@ def fitted_edit_loop(points: np.ndarray, target: np.ndarray, garment_centre: np.
     for _ in range(rounds):
         closest = closest_on_loop(points + length * axis + width * radial, target)
         (length, width), *_ = np.linalg.lstsq(design, (closest - points).reshape(-1), rcond=None)
-    return edited_loop(edited_loop(points, "length", float(length), garment_centre), "width", float(width), garment_centre)
+    return float(length), float(width)
 
 
 def edit_targets(category: str, vertices: np.ndarray, lines: dict[str, np.ndarray],

@@ -8,8 +8,9 @@ in or near it (multiplier m_r).
 The first round is the lines alone, and it is the CRDL edit the mesh's openings came from: for each
 line, the length and width edit of ``darts.deform`` (``darts.crdl.targets.edited_loop``: moved along
 its axis, let out from its centre) that best takes the template's line onto the mesh's loop
-(``fitted_edit_loop``), pushed ``DEFAULT_EASE`` out of the body and matched to the line's vertices by
-arc length, as ``darts.deform`` makes an edit, then solved as it solves one (``FIRST_ROUND_ITERATIONS``,
+(``fit_loop_edit``; the report's ``line_edits``, cm), pushed ``DEFAULT_EASE`` out of the body and
+matched to the line's vertices by arc length, as ``darts.deform`` makes an edit, then solved as it
+solves one (``FIRST_ROUND_ITERATIONS``,
 its start raced between the rest shape and the rest shape with the line vertices on their targets).
 The panels stretch as the garment's own edit stretched them and its seams land where that edit put
 them. Matching the template's lines to the mesh's loops directly instead — by angle about each loop's
@@ -36,7 +37,7 @@ from darts.body.segmentation import PART_NAMES, body_segmentation
 from darts.crdl.deform import fit_surface, handle_targets, weld_garment
 from darts.crdl.fit import FitSurface
 from darts.crdl.layer import Crdl, CrdlWeights
-from darts.crdl.targets import correspond_around, fitted_edit_loop
+from darts.crdl.targets import correspond_around, edited_loop, fit_loop_edit
 from darts.dart.model import Dart
 from darts.geometry.distance import SurfaceDistance
 from darts.geometry.loops import distance_to_loop
@@ -97,15 +98,18 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     (``dart_to_mesh``, ``mesh_to_dart``: point to surface, mm, with the panels where the farthest
     5 % lie, ``distance_summary``; a mesh point's panel is that of its closest DART face, and
     ``worst_body_parts`` the body parts its farthest points lie over), each line's residual (distance of the
-    DART's line vertices to the mesh's loop, mm) and the fraction of vertices inside the body; and the
+    DART's line vertices to the mesh's loop, mm), the fraction of vertices inside the body and each
+    line's fitted edit (``line_edits``: length and width, cm, as ``darts deform --edit`` takes them); and the
     distances it summarises, per point."""
     garment = weld_garment(template)
     surface = surface or fit_surface(template, body)
     mesh = SurfaceDistance(vertices, faces)
     loops = {name: vertices[loop] for name, loop in lines.items() if name in garment.lines}
     centre = garment.vertices.mean(0)
-    edited = {name: surface.push_out(fitted_edit_loop(garment.vertices[garment.lines[name]], loop, centre), DEFAULT_EASE)
-              for name, loop in loops.items()}
+    line_edits = {name: fit_loop_edit(garment.vertices[garment.lines[name]], loop, centre) for name, loop in loops.items()}
+    edited = {name: surface.push_out(edited_loop(edited_loop(garment.vertices[garment.lines[name]], "length", length, centre),
+                                                 "width", width, centre), DEFAULT_EASE)
+              for name, (length, width) in line_edits.items()}
     line_handles, edit_points = handle_targets(garment, edited)
     lines_alone = Crdl(garment.vertices, garment.faces, line_handles, surface)
     points = lines_alone.solve_local_global(edit_points, iterations=FIRST_ROUND_ITERATIONS).vertices
@@ -137,5 +141,7 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     report = {"dart_to_mesh": distance_summary(to_mesh, vertex_panel, names),
               "mesh_to_dart": {**distance_summary(to_dart, template.panel[np.maximum(nearest_face, 0)], names),
                                "worst_body_parts": by_part},
-              "feature_lines": residuals, "inside_body": surface.inside_fraction(points)}
+              "feature_lines": residuals, "inside_body": surface.inside_fraction(points),
+              "line_edits": {name: {"length_cm": 100 * length, "width_cm": 100 * width}
+                             for name, (length, width) in line_edits.items()}}
     return dart, report, RegistrationDistances(np.abs(to_mesh[garment.index]), np.abs(to_dart))
