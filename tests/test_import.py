@@ -449,18 +449,18 @@ def test_lines_are_matched_by_angle_around_their_centre_and_by_arc_length_when_n
 
 
 def test_an_openings_edit_is_recovered_from_the_loop_alone():
-    """A hem shortened 8.3 cm and let out 4.6 cm (``edited_loop``: the two edits ``darts.deform``
-    makes), resampled unevenly, reversed and starting elsewhere: ``fit_loop_edit`` finds both
+    """A hem shortened 8.3 cm and let out 4.6 cm (``length_and_width_edited``: the two edits
+    ``darts.deform`` makes), resampled unevenly, reversed and starting elsewhere: ``fit_loop_edit`` finds both
     amounts within 0.2 mm, and the template loop edited by them is the edited loop vertex for vertex
     (within 0.2 mm), where the target's points closest to the template's lie over 5 mm from their own."""
-    from darts.crdl.targets import edited_loop, fit_loop_edit
+    from darts.crdl.targets import fit_loop_edit, length_and_width_edited
     from darts.geometry.loops import closest_on_loop
 
     def ellipse(phases):
         return np.stack([0.09 * np.cos(phases) + 0.1, np.full(len(phases), -0.9), 0.06 * np.sin(phases)], 1)
 
     def edit(points, length, width):
-        return edited_loop(edited_loop(points, "length", length, garment_centre), "width", width, garment_centre)
+        return length_and_width_edited(points, length, width, garment_centre)
 
     garment_centre = np.array([0.0, -0.3, 0.0])
     template = ellipse(np.linspace(0, 2 * np.pi, 26, endpoint=False))

@@ -58,29 +58,36 @@ def loop_frame(points: np.ndarray, garment_centre: np.ndarray) -> tuple[np.ndarr
     return centre, axis if np.dot(axis, centre - garment_centre) >= 0 else -axis
 
 
-def edited_loop(points: np.ndarray, kind: str, amount: float, garment_centre: np.ndarray) -> np.ndarray:
-    """The loop moved ``amount`` along its axis ("length") or away from its centre in its plane ("width")."""
+def loop_directions(points: np.ndarray, garment_centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(unit axis [3], unit radial directions [K,3]) of a closed loop: its axis (``loop_frame``) and
+    each point's direction away from its centre within its plane."""
     centre, axis = loop_frame(points, garment_centre)
-    if kind == "length":
-        return points + amount * axis
     radial = points - centre
     radial -= np.outer(radial @ axis, axis)
-    return points + amount * radial / np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
+    return axis, radial / np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
+
+
+def edited_loop(points: np.ndarray, kind: str, amount: float, garment_centre: np.ndarray) -> np.ndarray:
+    """The loop moved ``amount`` along its axis ("length") or away from its centre in its plane ("width")."""
+    axis, radial = loop_directions(points, garment_centre)
+    return points + amount * (axis if kind == "length" else radial)
+
+
+def length_and_width_edited(points: np.ndarray, length: float, width: float, garment_centre: np.ndarray) -> np.ndarray:
+    """The loop edited as ``edit_targets`` edits a hem or a cuff: a "length", then a "width" (metres)."""
+    return edited_loop(edited_loop(points, "length", length, garment_centre), "width", width, garment_centre)
 
 
 def fit_loop_edit(points: np.ndarray, target: np.ndarray, garment_centre: np.ndarray,
                   rounds: int = 30) -> tuple[float, float]:
-    """(length, width), metres: the edit of the template loop ``points`` [K,3] (``edited_loop``: a
-    "length" a, then a "width" b) that best takes it onto the closed polyline ``target`` [M,3] — the
+    """(length, width), metres: the edit of the template loop ``points`` [K,3]
+    (``length_and_width_edited``) that best takes it onto the closed polyline ``target`` [M,3] — the
     edit an opening of an edited garment came from. The edited loop is x_k + a n + b r_k (n the
     loop's axis, r_k the unit radial direction of x_k in its plane), linear in (a, b): alternately
     each edited point's closest point c_k on the target and the least-squares (a, b) of
     sum_k |x_k + a n + b r_k - c_k|^2 (an ICP with two unknowns, ``rounds`` times)."""
     points = np.asarray(points, np.float64)
-    centre, axis = loop_frame(points, garment_centre)
-    radial = points - centre
-    radial -= np.outer(radial @ axis, axis)
-    radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-9)
+    axis, radial = loop_directions(points, garment_centre)
     design = np.stack([np.broadcast_to(axis, radial.shape), radial], -1).reshape(-1, 2)
     length = width = 0.0
     for _ in range(rounds):

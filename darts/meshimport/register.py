@@ -6,12 +6,12 @@ vertex pulled to its closest point on the mesh, moved ``CLEARANCE`` out of the b
 in or near it (multiplier m_r).
 
 The first round is the lines alone, and it is the CRDL edit the mesh's openings came from: for each
-line, the length and width edit of ``darts.deform`` (``darts.crdl.targets.edited_loop``: moved along
+line, the length and width edit of ``darts.deform`` (``darts.crdl.targets.length_and_width_edited``: moved along
 its axis, let out from its centre) that best takes the template's line onto the mesh's loop
 (``fit_loop_edit``; the report's ``line_edits``, cm), pushed ``DEFAULT_EASE`` out of the body and
 matched to the line's vertices by arc length, as ``darts.deform`` makes an edit, then solved as it
-solves one (``FIRST_ROUND_ITERATIONS``,
-its start raced between the rest shape and the rest shape with the line vertices on their targets).
+solves one (``FIRST_ROUND_ITERATIONS``, its start raced between the rest shape and the rest shape
+with the line vertices on their targets).
 The panels stretch as the garment's own edit stretched them and its seams land where that edit put
 them. Matching the template's lines to the mesh's loops directly instead — by angle about each loop's
 centre — left every seam vertex within 5 mm on 17 of the round trip's 22 garments (the farthest
@@ -37,7 +37,7 @@ from darts.body.segmentation import PART_NAMES, body_segmentation
 from darts.crdl.deform import fit_surface, handle_targets, weld_garment
 from darts.crdl.fit import FitSurface
 from darts.crdl.layer import Crdl, CrdlWeights
-from darts.crdl.targets import correspond_around, edited_loop, fit_loop_edit
+from darts.crdl.targets import correspond_around, fit_loop_edit, length_and_width_edited
 from darts.dart.model import Dart
 from darts.geometry.distance import SurfaceDistance
 from darts.geometry.loops import distance_to_loop
@@ -107,9 +107,8 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     loops = {name: vertices[loop] for name, loop in lines.items() if name in garment.lines}
     centre = garment.vertices.mean(0)
     line_edits = {name: fit_loop_edit(garment.vertices[garment.lines[name]], loop, centre) for name, loop in loops.items()}
-    edited = {name: surface.push_out(edited_loop(edited_loop(garment.vertices[garment.lines[name]], "length", length, centre),
-                                                 "width", width, centre), DEFAULT_EASE)
-              for name, (length, width) in line_edits.items()}
+    edited = {name: surface.push_out(length_and_width_edited(garment.vertices[garment.lines[name]], length, width, centre),
+                                     DEFAULT_EASE) for name, (length, width) in line_edits.items()}
     line_handles, edit_points = handle_targets(garment, edited)
     lines_alone = Crdl(garment.vertices, garment.faces, line_handles, surface)
     points = lines_alone.solve_local_global(edit_points, iterations=FIRST_ROUND_ITERATIONS).vertices
