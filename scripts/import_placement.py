@@ -1,14 +1,18 @@
 """The placement alone of the import round trip's garments (docs/import.md, ``darts.meshimport.align``):
 each written file read, repaired and placed on its category's shipped template (arms at rest, as
-the round trip's garments are), then measured against the edited garment it was made from.
+the round trip's garments are), and that placement refined on its openings' fitted edit
+(``darts.meshimport.register.placed_on_edit``, which the import registers as one more candidate),
+each measured against the edited garment it was made from.
 
     python scripts/import_placement.py [--work ~/.cache/darts/import-round-trip] [ROW ...]
 
 Needs the files ``scripts/import_round_trip.py`` wrote under ``--work`` (garments with an
-accessory are left out: their template is built, not shipped). Per row: the mean unsigned distance
-of the placed file's vertices to the original's welded surface (mm), and the placement's rotation
-error against the rigid motion the file was written with (degrees, as yaw about Y, pitch about X,
-roll about Z). No output file: the numbers quoted in ``align.py`` and docs/import.md.
+accessory are left out: their template is built, not shipped). Per row and placement: the mean
+unsigned distance of the placed file's vertices to the original's welded surface (mm), their mean
+distance from where the rigid motion the file was written with says they belong (mm: a garment slid
+along itself, which the surface distance hardly sees, counts here), and the rotation error against
+that motion (degrees, as yaw about Y, pitch about X, roll about Z). No output file: the numbers
+quoted in ``align.py``, ``register.py`` and docs/import.md.
 """
 from __future__ import annotations
 
@@ -23,8 +27,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
-def place_row(work: Path, row: int, body) -> tuple[str, float, np.ndarray] | None:
-    """(category, mean distance mm, yaw/pitch/roll error deg) of round-trip garment ``row``."""
+def place_row(work: Path, row: int, body) -> tuple[str, list[tuple[float, float, np.ndarray]]] | None:
+    """(category, [(surface distance mm, vertex offset mm, yaw/pitch/roll error deg)] of the placement
+    and of it refined on the edit) of round-trip garment ``row``."""
     from scipy.spatial.transform import Rotation
 
     from darts.crdl.deform import weld_garment
@@ -35,6 +40,7 @@ def place_row(work: Path, row: int, body) -> tuple[str, float, np.ndarray] | Non
     from darts.meshimport.align import align_to_template, apply_matrix
     from darts.meshimport.pose import lower_arms
     from darts.meshimport.read import read_garment_mesh
+    from darts.meshimport.register import placed_on_edit
     from darts.meshimport.repair import repair_garment_mesh
     from darts.templates.categories import CATEGORIES
     from scenes import GARMENTS_DIR
@@ -52,12 +58,20 @@ def place_row(work: Path, row: int, body) -> tuple[str, float, np.ndarray] | Non
     fit = FitSurface(lower_arms(shipped, body, 0.0).body_vertices, body.faces, hull)  # the body at rest, as the import
     placement = align_to_template(vertices, faces, loops, CATEGORIES[draw["category"]], template.vertices,
                                   template.faces, template.lines, fit)
+    targets = {name: loop for name, loop in placement.lines.items() if name not in placement.folded}
+    refined = placed_on_edit(placement, vertices, shipped, fit, targets)
     original = welded(load_dart(stem.with_suffix(".original.npz")))
-    distance, _, _ = SurfaceDistance(np.asarray(original[0], np.float64), original[1]).query(
-        apply_matrix(placement.matrix, vertices), winding=False)
+    surface = SurfaceDistance(np.asarray(original[0], np.float64), original[1])
     written = Rotation.from_euler("yx", [draw["yaw_deg"], draw["tilt_deg"]], degrees=True).as_matrix()
-    error = Rotation.from_matrix(placement.matrix[:3, :3] @ written).as_euler("yxz", degrees=True)
-    return draw["category"], 1e3 * float(np.abs(distance).mean()), error
+    belong = (vertices - draw["move_m"]) @ written  # x = R y + move, so y = R^T (x - move)
+    measured = []
+    for alignment in (placement, refined):
+        placed = apply_matrix(alignment.matrix, vertices)
+        distance, _, _ = surface.query(placed, winding=False)
+        error = Rotation.from_matrix(alignment.matrix[:3, :3] @ written).as_euler("yxz", degrees=True)
+        measured.append((1e3 * float(np.abs(distance).mean()), 1e3 * float(np.linalg.norm(placed - belong, axis=1).mean()),
+                         error))
+    return draw["category"], measured
 
 
 def main() -> None:
@@ -68,16 +82,19 @@ def main() -> None:
     parser.add_argument("rows", type=int, nargs="*", help="rows (default: every one under --work)")
     args = parser.parse_args()
     rows = args.rows or sorted(int(p.stem[1:]) for p in args.work.glob("g[0-9][0-9].json"))
-    body, means = load_body(None), []
+    body, totals = load_body(None), []
     for row in rows:
         placed = place_row(args.work, row, body)
         if placed is None:
             continue
-        category, mean, error = placed
-        means.append(mean)
-        print(f"{row:2d} {category:20s} {mean:6.2f} mm   yaw {error[0]:+.2f}  pitch {error[1]:+.2f}  roll {error[2]:+.2f} deg",
-              flush=True)
-    print(f"mean over {len(means)}: {np.mean(means):.2f} mm")
+        category, measured = placed
+        totals.append([(distance, offset) for distance, offset, _ in measured])
+        print(f"{row:2d} {category:18s}" + " | ".join(
+            f"{name} {distance:5.2f} mm, off {offset:5.2f} mm, yaw {error[0]:+.2f} pitch {error[1]:+.2f} roll {error[2]:+.2f} deg"
+            for name, (distance, offset, error) in zip(("placed", "on its edit"), measured)), flush=True)
+    means = np.mean(totals, axis=0)
+    print(f"mean over {len(totals)}: placed {means[0, 0]:.2f} mm (off {means[0, 1]:.2f} mm); "
+          f"on its edit {means[1, 0]:.2f} mm (off {means[1, 1]:.2f} mm)")
 
 
 if __name__ == "__main__":

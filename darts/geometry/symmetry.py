@@ -30,6 +30,12 @@ class MirrorPlane:
     offset: float
     residual: float
 
+    def moved(self, matrix: np.ndarray) -> MirrorPlane:
+        """The plane carried by ``matrix`` [4,4] (x -> s R x + t): normal R n, offset s d + (R n).t."""
+        scale = float(np.cbrt(np.linalg.det(matrix[:3, :3])))
+        normal = matrix[:3, :3] @ self.normal / scale
+        return MirrorPlane(normal, scale * self.offset + float(normal @ matrix[:3, 3]), scale * self.residual)
+
     def reflect(self, points: np.ndarray) -> np.ndarray:
         """``points`` [N,3] reflected in the plane."""
         return points - 2.0 * (points @ self.normal - self.offset)[:, None] * self.normal

@@ -98,7 +98,8 @@ class Alignment:
     matrix applies and the one the screening's similarity found (``estimated_scale``: how far the
     units are off), and the anchor lines whose loops are a folded-over edge (``folded_over``):
     placed by the template's line put on the mesh's surface, not by the loop, and left out of the
-    registration's line targets."""
+    registration's line targets; ``mirror``: the mesh's mirror plane (canonical frame, before
+    placing) and the template's, where the placement kept them parallel (``umeyama_mirrored``)."""
 
     matrix: np.ndarray
     lines: dict[str, np.ndarray]
@@ -106,6 +107,7 @@ class Alignment:
     scale: float
     estimated_scale: float
     folded: tuple[str, ...] = ()
+    mirror: tuple[MirrorPlane, MirrorPlane] | None = None
 
 
 def umeyama(source: np.ndarray, target: np.ndarray, weights: np.ndarray | None = None,
@@ -124,7 +126,8 @@ def umeyama(source: np.ndarray, target: np.ndarray, weights: np.ndarray | None =
     return scale, matrix, mean_y - scale * matrix @ mean_x
 
 
-def _matrix(scale: float, rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+def similarity_matrix(scale: float, rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    """The 4x4 matrix of x -> scale R x + t."""
     out = np.eye(4)
     out[:3, :3], out[:3, 3] = scale * rotation, translation
     return out
@@ -157,7 +160,7 @@ def _folded_anchors(vertices: np.ndarray, faces: np.ndarray, lines: dict[str, np
     return tuple(name for name in ANCHOR_LINES if name in lines and folded_over(vertices, faces, lines[name]))
 
 
-def _loop_pairs(vertices, lines, template_vertices, template_lines) -> tuple[np.ndarray, np.ndarray]:
+def loop_pairs(vertices, lines, template_vertices, template_lines) -> tuple[np.ndarray, np.ndarray]:
     """Mesh loop points and the template line points they match (arc length, best start)."""
     if not lines:
         return np.zeros((0, 3)), np.zeros((0, 3))
@@ -247,10 +250,10 @@ def _refine(similarity, turned, turned_sample, lines, template_surface, template
     folded_surface = SurfaceDistance(turned, faces) if folded else None
     s, r, t = similarity
     for step in range(iterations):
-        placed = _matrix(s, r, t)
+        placed = similarity_matrix(s, r, t)
         gap, closest, _ = template_surface.query(apply_matrix(placed, turned_sample), winding=False)
         if step % PAIRING_INTERVAL == 0:
-            loop_source, loop_target = _loop_pairs(apply_matrix(placed, turned), lines, template_vertices, template_lines)
+            loop_source, loop_target = loop_pairs(apply_matrix(placed, turned), lines, template_vertices, template_lines)
             loop_source = apply_matrix(np.linalg.inv(placed), loop_source)
         on_mesh = np.zeros((0, 3)) if folded_surface is None else \
             folded_surface.query(apply_matrix(np.linalg.inv(placed), line_points), winding=False)[1]
@@ -280,7 +283,7 @@ def align_to_template(vertices: np.ndarray, faces: np.ndarray, loops: list[np.nd
     sample, template_sample = _sample(vertices, rng), _sample(template_vertices, rng)
 
     def placement(start, similarity, lines, estimated_scale):
-        matrix = _matrix(*similarity) @ start
+        matrix = similarity_matrix(*similarity) @ start
         distance = _two_way_distance(apply_matrix(matrix, sample), template_surface, template_sample,
                                      SurfaceDistance(apply_matrix(matrix, vertices), faces))
         return Alignment(matrix, lines, distance, similarity[0], estimated_scale)
@@ -291,18 +294,19 @@ def align_to_template(vertices: np.ndarray, faces: np.ndarray, loops: list[np.nd
         start = _yaw(degrees, vertices.mean(0))
         turned, turned_sample = apply_matrix(start, vertices), apply_matrix(start, sample)
         lines = name_loops(category, turned, loops)
-        pairs = _loop_pairs(turned, lines, template_vertices, template_lines)
+        pairs = loop_pairs(turned, lines, template_vertices, template_lines)
         estimated_scale = umeyama(*pairs)[0]
         similarity = _refine(umeyama(*pairs, scale_range=scale_range), turned, turned_sample, lines, template_surface,
                              template_vertices, template_lines, fit, SCREEN_ITERATIONS, scale_range)
         screened.append((placement(start, similarity, lines, estimated_scale), start, similarity, turned, turned_sample))
     best, start, similarity, turned, turned_sample = min(screened, key=lambda entry: entry[0].distance)
     folded = _folded_anchors(vertices, faces, best.lines)
+    mirror = _mirrors(turned, faces, turned_sample, similarity, template_vertices, template_faces)
     similarity = _refine(similarity, turned, turned_sample, best.lines, template_surface, template_vertices,
                          template_lines, fit, ICP_ITERATIONS - SCREEN_ITERATIONS, scale_range, final=True,
-                         folded=folded, faces=faces,
-                         mirror=_mirrors(turned, faces, turned_sample, similarity, template_vertices, template_faces))
-    return replace(placement(start, similarity, best.lines, best.estimated_scale), folded=folded)
+                         folded=folded, faces=faces, mirror=mirror)
+    mirror = None if mirror is None else (mirror[0].moved(np.linalg.inv(start)), mirror[1])
+    return replace(placement(start, similarity, best.lines, best.estimated_scale), folded=folded, mirror=mirror)
 
 
 def _mirrors(turned, faces, turned_sample, similarity, template_vertices, template_faces):

@@ -23,6 +23,8 @@ from darts.templates.categories import CATEGORIES
 #: How many of the winning category's poses (arm angles), closest placement first, are registered;
 #: the best registration (both directions' mean distance) is kept. The placement alone misjudges
 #: the angle: on Newton's shirt it prefers 60 deg, whose registration fits worse than 45 deg's.
+#: Without ``--transform`` the closest placement is also refined on its openings' fitted edit
+#: (``darts.meshimport.register.placed_on_edit``) and registered as one more candidate.
 REGISTERED_POSES = 2
 #: Largest extent (metres) a garment may have once read; beyond, the units are wrong.
 GARMENT_EXTENT = (0.05, 3.0)
@@ -107,7 +109,7 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
     from darts.meshimport.align import SCALE_RANGE, align_to_template, apply_matrix, naming_only
     from darts.meshimport.own_mesh import dart_from_mesh
     from darts.meshimport.pose import arm_angles, lower_arms
-    from darts.meshimport.register import distance_stats, register_template
+    from darts.meshimport.register import distance_stats, placed_on_edit, register_template
 
     options = options or ImportOptions()
     say = progress or (lambda text: None)
@@ -138,8 +140,14 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
             tried.setdefault(category, []).append((alignment, lowered, surface))
         tried[category].sort(key=lambda placement: placement[0].distance)
     category = min(tried, key=lambda c: tried[c][0][0].distance)
-    registered = []  # (two-way mean, alignment, lowered, placed mesh, dart, fit, distances) per placement
-    for alignment, lowered, surface in tried[category][:REGISTERED_POSES]:
+    candidates = [(alignment, lowered, surface, False) for alignment, lowered, surface in tried[category][:REGISTERED_POSES]]
+    if options.transform is None:
+        best, lowered, surface, _ = candidates[0]
+        say("placing the mesh on its openings' fitted edit")
+        targets = {name: loop for name, loop in best.lines.items() if name not in best.folded}
+        candidates.append((placed_on_edit(best, vertices, lowered.template, surface, targets), lowered, surface, True))
+    registered = []  # (two-way mean, alignment, lowered, placed mesh, dart, fit, distances, on the edit) per placement
+    for alignment, lowered, surface, on_edit in candidates:
         if options.transform is None and not SCALE_RANGE[0] < alignment.estimated_scale < SCALE_RANGE[1]:
             raise DartsInputError(path, f"would need scaling by {alignment.estimated_scale:g} or beyond to fit the body "
                                         f"(at most {SCALE_RANGE[0]}-{SCALE_RANGE[1]}): check --units")
@@ -149,8 +157,8 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
         targets = {name: loop for name, loop in alignment.lines.items() if name not in alignment.folded}
         dart, fit, distances = register_template(lowered.template, body, placed, faces, targets, surface)
         registered.append((fit["dart_to_mesh"]["mean_mm"] + fit["mesh_to_dart"]["mean_mm"], alignment, lowered, placed,
-                           dart, fit, distances))
-    _, alignment, lowered, placed, posed, fit, distances = min(registered, key=lambda r: r[0])
+                           dart, fit, distances, on_edit))
+    _, alignment, lowered, placed, posed, fit, distances, on_edit = min(registered, key=lambda r: r[0])
     template = replace(posed, vertices=lowered.rest(posed.vertices).astype(np.float32))
     dart = template
     if options.own_mesh:
@@ -162,7 +170,8 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
               "category_guess": None if options.category else {c: 1e3 * t[0][0].distance for c, t in tried.items()},
               "transform": transform.tolist(), "scale": alignment.scale,
               "estimated_scale": alignment.estimated_scale,
-              "placement": "--transform" if options.transform is not None else "aligned to the template's openings",
+              "placement": "--transform" if options.transform is not None else
+                           "aligned to the template's openings" + (", then to their fitted edit's shape" if on_edit else ""),
               "placement_distance_mm": 1e3 * alignment.distance, "folded_lines": list(alignment.folded),
               "arms_lowered_degrees": lowered.degrees,
               "notes": notes + [f"the {name} opening lies on the garment's own surface (a collar's edge?): placed by the "
