@@ -141,6 +141,10 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
         tried[category].sort(key=lambda placement: placement[0].distance)
     category = min(tried, key=lambda c: tried[c][0][0].distance)
     candidates = [(alignment, lowered, surface, False) for alignment, lowered, surface in tried[category][:REGISTERED_POSES]]
+    for alignment, _, _, _ in candidates:
+        if options.transform is None and not SCALE_RANGE[0] < alignment.estimated_scale < SCALE_RANGE[1]:
+            raise DartsInputError(path, f"would need scaling by {alignment.estimated_scale:g} or beyond to fit the body "
+                                        f"(at most {SCALE_RANGE[0]}-{SCALE_RANGE[1]}): check --units")
     if options.transform is None:
         best, lowered, surface, _ = candidates[0]
         say("placing the mesh on its openings' fitted edit")
@@ -148,9 +152,6 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
         candidates.append((placed_on_edit(best, vertices, lowered.template, surface, targets), lowered, surface, True))
     registered = []  # (two-way mean, alignment, lowered, placed mesh, dart, fit, distances, on the edit) per placement
     for alignment, lowered, surface, on_edit in candidates:
-        if options.transform is None and not SCALE_RANGE[0] < alignment.estimated_scale < SCALE_RANGE[1]:
-            raise DartsInputError(path, f"would need scaling by {alignment.estimated_scale:g} or beyond to fit the body "
-                                        f"(at most {SCALE_RANGE[0]}-{SCALE_RANGE[1]}): check --units")
         say(f"registering the {category} template onto the mesh" + (f", arms lowered {lowered.degrees:g} deg"
                                                                      if lowered.degrees else ""))
         placed = apply_matrix(alignment.matrix, vertices)
