@@ -175,7 +175,7 @@ def loop_pairs(vertices, lines, template_vertices, template_lines) -> tuple[np.n
     return np.concatenate(sources), np.concatenate(targets)
 
 
-def _sample(points: np.ndarray, rng) -> np.ndarray:
+def sample_points(points: np.ndarray, rng) -> np.ndarray:
     """At most SURFACE_SAMPLES of ``points``, drawn without replacement."""
     return points[rng.choice(len(points), min(SURFACE_SAMPLES, len(points)), replace=False)]
 
@@ -231,6 +231,16 @@ def umeyama_mirrored(source: np.ndarray, target: np.ndarray, weights: np.ndarray
     return scale, rotation, translation
 
 
+def best_motion(source: np.ndarray, target: np.ndarray, weights: np.ndarray,
+                mirror: tuple[MirrorPlane, MirrorPlane] | None,
+                scale_range: tuple[float, float]) -> tuple[float, np.ndarray, np.ndarray]:
+    """(s, R, t): ``umeyama`` of the weighted pairs, or ``umeyama_mirrored`` keeping the ``mirror``
+    planes parallel where they are given."""
+    if mirror is None:
+        return umeyama(source, target, weights, scale_range)
+    return umeyama_mirrored(source, target, weights, mirror, scale_range)
+
+
 def _refine(similarity, turned, turned_sample, lines, template_surface, template_vertices, template_lines, fit,
             iterations: int, scale_range: tuple[float, float] = SCALE_RANGE, final: bool = False,
             folded: tuple[str, ...] = (), faces: np.ndarray | None = None,
@@ -265,8 +275,7 @@ def _refine(similarity, turned, turned_sample, lines, template_surface, template
         weights = np.r_[surface_weights, np.full(len(pairs_source), ANCHOR_WEIGHT if final else LOOP_WEIGHT),
                         np.full(len(inside), BODY_WEIGHT)]
         source, target = np.r_[turned_sample, pairs_source, inside], np.r_[closest, pairs_target, outside]
-        s, r, t = umeyama(source, target, weights, scale_range) if mirror is None else \
-            umeyama_mirrored(source, target, weights, mirror, scale_range)
+        s, r, t = best_motion(source, target, weights, mirror, scale_range)
     return s, r, t
 
 
@@ -280,7 +289,7 @@ def align_to_template(vertices: np.ndarray, faces: np.ndarray, loops: list[np.nd
     is the ``estimated_scale``."""
     template_surface = SurfaceDistance(template_vertices, template_faces)
     rng = np.random.default_rng(seed)
-    sample, template_sample = _sample(vertices, rng), _sample(template_vertices, rng)
+    sample, template_sample = sample_points(vertices, rng), sample_points(template_vertices, rng)
 
     def placement(start, similarity, lines, estimated_scale):
         matrix = similarity_matrix(*similarity) @ start
@@ -336,7 +345,7 @@ def naming_only(vertices: np.ndarray, faces: np.ndarray, loops: list[np.ndarray]
     distance to the ``template`` (a WeldedGarment) measured as ``align_to_template`` does."""
     rng = np.random.default_rng(seed)
     placed = apply_matrix(matrix, vertices)
-    sample, template_sample = _sample(placed, rng), _sample(template.vertices, rng)
+    sample, template_sample = sample_points(placed, rng), sample_points(template.vertices, rng)
     distance = _two_way_distance(sample, SurfaceDistance(template.vertices, template.faces), template_sample,
                                  SurfaceDistance(placed, faces))
     scale = float(np.cbrt(np.linalg.det(matrix[:3, :3])))

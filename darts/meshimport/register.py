@@ -56,10 +56,10 @@ from darts.meshimport.align import (
     ANCHOR_WEIGHT,
     Alignment,
     apply_matrix,
+    best_motion,
     loop_pairs,
+    sample_points,
     similarity_matrix,
-    umeyama,
-    umeyama_mirrored,
 )
 from darts.templates.defaults import DEFAULT_EASE
 
@@ -181,9 +181,8 @@ def register_template(template: Dart, body: BodyModel, vertices: np.ndarray, fac
     return dart, report, RegistrationDistances(np.abs(to_mesh[garment.index]), np.abs(to_dart))
 
 
-#: Placing the mesh on its openings' edit: rigid ICP steps, mesh vertices sampled (seeded).
+#: Rigid ICP steps placing the mesh on its openings' edit (on ``sample_points`` of it, seeded).
 PLACEMENT_STEPS = 10
-PLACEMENT_SAMPLES = 3000
 
 
 def placed_on_edit(alignment: Alignment, vertices: np.ndarray, template: Dart, surface: FitSurface,
@@ -201,8 +200,7 @@ def placed_on_edit(alignment: Alignment, vertices: np.ndarray, template: Dart, s
     anchors' length too let the shape follow the mesh down (3.5 mm after ten steps).
     ``darts.meshimport.pipeline`` keeps it only when its registration fits better."""
     garment = weld_garment(template)
-    rng = np.random.default_rng(0)
-    sample = vertices[rng.choice(len(vertices), min(PLACEMENT_SAMPLES, len(vertices)), replace=False)]
+    sample = sample_points(vertices, np.random.default_rng(0))
     placed = apply_matrix(alignment.matrix, vertices)
     loops = {name: placed[loop] for name, loop in lines.items() if name in garment.lines}
     shape_vertices = edit_shape(garment, surface, loops, held=ANCHOR_LINES)[2]
@@ -215,7 +213,6 @@ def placed_on_edit(alignment: Alignment, vertices: np.ndarray, template: Dart, s
         loop_points, line_points = loop_pairs(apply_matrix(matrix, vertices), anchors, shape_vertices, garment.lines)
         weights = np.r_[np.ones(len(moved)), np.full(len(loop_points), ANCHOR_WEIGHT)]
         source, target = np.r_[moved, loop_points], np.r_[closest, line_points]
-        motion = umeyama(source, target, weights, scale_range=(1.0, 1.0)) if alignment.mirror is None else \
-            umeyama_mirrored(source, target, weights, (alignment.mirror[0].moved(matrix), alignment.mirror[1]), (1.0, 1.0))
-        matrix = similarity_matrix(*motion) @ matrix
+        mirror = None if alignment.mirror is None else (alignment.mirror[0].moved(matrix), alignment.mirror[1])
+        matrix = similarity_matrix(*best_motion(source, target, weights, mirror, (1.0, 1.0))) @ matrix
     return replace(alignment, matrix=matrix)
