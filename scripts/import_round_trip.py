@@ -4,9 +4,12 @@ the garment they came from.
 
     python scripts/import_round_trip.py [--count 20] [--collars 2] [--seed 0] [--work DIR]
                                         [--out docs/data/import_round_trip.json] [--rows FIRST LAST]
+                                        [--own-mesh-again TAG]
 
 Garment k (``--seed`` and k fix every draw; resumable: a garment whose result is under ``--work``,
-default ~/.cache/darts/import-round-trip, is not made again):
+default ~/.cache/darts/import-round-trip, is not made again; ``--own-mesh-again TAG`` imports only
+its ``--own-mesh`` column again, from the same file, after a change that touches nothing else; TAG
+names the change, and a garment done again under it is not done again):
 1. **Category** ``CATEGORIES[k % 10]``; the last ``--collars`` garments are short- and long-sleeve
    tops built with the collar accessory (``darts.template(..., accessories=["collar"])``).
 2. **Edits**: every edit of the category's dataset ranges (``sim.dataset.recipe.EDIT_RANGES``: hem,
@@ -137,6 +140,16 @@ def run_one(draw: dict, work: Path, seed: int) -> dict:
             "own_mesh": import_and_measure(mesh, original, stem.with_name(stem.name + "-own"), seed, own_mesh=True)}
 
 
+def own_mesh_again(row: dict, work: Path, seed: int) -> dict:
+    """``row`` with its ``--own-mesh`` import made and measured again from the file under ``work``."""
+    from darts.dart.io import load_dart
+
+    stem = work / f"g{row['index']:02d}-{row['category']}"
+    original = load_dart(stem.with_suffix(".original.npz"))
+    mesh = stem.with_suffix(f".{row['format']}")
+    return {**row, "own_mesh": import_and_measure(mesh, original, stem.with_name(stem.name + "-own"), seed, own_mesh=True)}
+
+
 def _means(r: dict) -> str:
     return f"{r['imported_to_original']['mean_mm']:.2f} / {r['original_to_imported']['mean_mm']:.2f} mm"
 
@@ -189,6 +202,9 @@ def main() -> None:
     parser.add_argument("--rows", type=int, nargs=2, metavar=("FIRST", "LAST"),
                         help="make and measure only garments FIRST..LAST (two runs at once share the work); the table "
                              "is written when every garment is under --work")
+    parser.add_argument("--own-mesh-again", metavar="TAG",
+                        help="import the garments already under --work again with --own-mesh only (after a change to "
+                             "it alone, named TAG), from the same files; a garment already done again under TAG is kept")
     args = parser.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
     rows = []
@@ -198,7 +214,11 @@ def main() -> None:
         if args.rows and not args.rows[0] <= k <= args.rows[1]:
             continue
         if done.exists() and json.loads(done.read_text())["recipe"] == draw:
-            row = json.loads(done.read_text())["row"]
+            record = json.loads(done.read_text())
+            row = record["row"]
+            if args.own_mesh_again and record.get("own_mesh_again") != args.own_mesh_again:
+                row = own_mesh_again(row, args.work, args.seed)
+                done.write_text(json.dumps({"recipe": draw, "row": row, "own_mesh_again": args.own_mesh_again}))
         else:
             row = run_one(draw, args.work, args.seed)
             done.write_text(json.dumps({"recipe": draw, "row": row}))

@@ -307,8 +307,9 @@ def test_an_edited_remeshed_garment_in_millimetres_comes_back_at_its_size_and_pl
 def test_own_mesh_keeps_a_collar_the_template_lacks(tmp_path, run_darts, run_sim):
     """Issue 47, details: a T-shirt built with the collar accessory, remeshed and written in
     centimetres, imported with ``--own-mesh``: its surface comes back whole, collar included (the
-    registered template has no collar), cut into the template's four panels with the collar part of
-    the one it is sewn to, and it simulates."""
+    registered template has no collar), cut into the template's four panels with the collar whole, in
+    the one it is sewn to (cut at the shoulder line, where it lies over the shoulder seams, its seam
+    vertices were 6.6 mm off the original's), and it simulates."""
     import darts
     from tests.helpers import isotropic_remesh, round_trip_distances
 
@@ -333,6 +334,9 @@ def test_own_mesh_keeps_a_collar_the_template_lacks(tmp_path, run_darts, run_sim
     collar = original.vertices[original.faces[original.panel == original.panel_names.index("collar")]].mean(1)
     to_dart, _, _ = SurfaceDistance(dart.vertices, dart.faces).query(collar, winding=False)
     assert np.percentile(np.abs(to_dart), 95) < 0.008  # the collar is there
+    collar_faces = SurfaceDistance(dart.vertices, dart.faces).closest_faces(collar)[0]
+    assert np.bincount(dart.panel[collar_faces]).max() >= 0.98 * len(collar)  # in one panel
+    assert measured["seams"]["max_mm"] <= 5.0, measured["seams"]  # the seams where the original's are
     code, _, err = run_sim(tmp_path / "g.npz", "walk", "--frames", "10", "-o", tmp_path / "walk.usdc", "--stats",
                            tmp_path / "s.json", "--quiet")
     assert code == 0, err
@@ -517,3 +521,26 @@ def test_trousers_shortened_and_let_out_are_placed_on_their_openings_edit():
                                     axis=1).mean()
 
     assert off_mm(refined) <= min(0.5, off_mm(placed)), (off_mm(placed), off_mm(refined))
+
+
+def test_a_collar_folded_over_the_shirt_is_found_whole_with_its_fold_on_the_neckline():
+    """``own_mesh._folded_details`` on a T-shirt built with the collar accessory (welded), against the
+    same T-shirt without it: one detail, the collar's triangles (they face against the shirt they lie
+    on) and nothing else, its fold the neckline it is sewn to."""
+    import darts
+    from darts.dart.model import welded
+    from darts.meshimport.own_mesh import _folded_details
+
+    shirt = darts.template("short-sleeve-top")
+    collared = darts.template("short-sleeve-top", accessories=["collar"])
+    vertices, faces, index = welded(collared)
+    collar_vertex = np.zeros(len(vertices), bool)
+    collar_vertex[index[np.asarray(collared.faces)[collared.panel == collared.panel_names.index("collar")]]] = True
+    neckline = np.zeros(len(vertices), bool)
+    neckline[np.unique(index[np.asarray(shirt.lines["neckline"])])] = True  # the shirt's vertices come first
+    details = _folded_details(shirt, np.asarray(vertices, np.float64), np.asarray(faces))
+    assert len(details) == 1
+    inside, fold = details[0]
+    assert not (inside & fold).any() and not (inside & ~collar_vertex).any()
+    assert np.array_equal(fold, neckline)
+    assert inside.sum() == collar_vertex.sum() - neckline.sum()

@@ -7,7 +7,11 @@ and whatever the template lacks (a collar, a pocket, a ruffle) are the file's.
    are its seams. The mesh is cut exactly along them (``darts.meshimport.panel_cut``: triangles
    split where a border crosses them, a vertex next to a border moved onto it), not along its own
    edges, so a seam runs where the template's does and not half a triangle either side. A detail
-   the template lacks lies nearest the panel it is attached to, and becomes part of it.
+   the template lacks lies nearest the panel it is attached to, and becomes part of it; one folded
+   over the garment (a collar turned down over the shoulders, facing against the template's
+   surface) would lie nearest the panels under it and be cut at their seams, so it is kept whole,
+   in the panel its fold lies nearest, with the border along the fold, where it is sewn on
+   (``_folded_details``: the round trip's collared tops' seams 7.1 / 6.9 mm off, now 4.3 / 2.7).
 2. **Cut**: a vertex on a border between k panels becomes k vertices, one per panel; every two of
    them are a seam pair, on the seam of the nearest template pair between the same two panels
    (two panels may share several seams: the shoulders and the sides), at that pair's position
@@ -41,6 +45,60 @@ def _panel_distances(template: Dart, points: np.ndarray) -> np.ndarray:
     faces = np.asarray(template.faces)
     return np.stack([np.abs(SurfaceDistance(template_vertices, faces[panels == p]).query(points, winding=False)[0])
                      for p in range(len(template.panel_names))], 1)
+
+
+#: A detail is a connected region of at least this many triangles folded against the template.
+FOLD_MIN = 20
+
+
+def _folded_details(template: Dart, vertices: np.ndarray, faces: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each detail the template lacks that is folded over the garment (a collar turned down over the
+    shoulders at the neckline it is sewn to) as (its vertices [N] mask, its fold [N] mask) of the
+    mesh ``vertices``, ``faces``: a connected region (triangles sharing edges) of at least
+    ``FOLD_MIN`` triangles whose normal faces against the template's face normal at their centroid's
+    closest point (n_mesh . n_template < 0; the mesh's winding oriented to the template's by the
+    area-weighted median). Its vertices are those whose every triangle is in it; its fold, those
+    with triangles in it and out of it: the line where it turns over, where it is sewn on."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from darts.geometry.distance import SurfaceDistance
+
+    corners = vertices[faces]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    area = np.linalg.norm(normal, axis=1)
+    surface = SurfaceDistance(np.asarray(template.vertices, np.float64), np.asarray(template.faces, np.int64))
+    facing = (normal * surface.query(corners.mean(1), winding=False)[2]).sum(1) / np.maximum(area, 1e-18)
+    order = np.argsort(facing)
+    median = facing[order][np.searchsorted(np.cumsum(area[order]), 0.5 * area.sum())]
+    folded = facing * (1.0 if median >= 0 else -1.0) < 0
+
+    face_ids = np.flatnonzero(folded)
+    corner_face = np.repeat(np.arange(len(faces)), 3)
+    incidence = coo_matrix((np.ones(3 * len(faces)), (faces.reshape(-1), corner_face)), shape=(len(vertices), len(faces))).tocsr()
+    sub = incidence[:, face_ids]
+    adjacency = (sub.T @ sub) >= 2  # two folded triangles sharing an edge
+    _, region = connected_components(adjacency, directed=False)
+    in_folded = np.asarray(sub.sum(1)).ravel()
+    total = np.asarray(incidence.sum(1)).ravel()
+    details = []
+    for r in np.flatnonzero(np.bincount(region) >= FOLD_MIN):
+        touching = np.asarray(sub[:, region == r].sum(1)).ravel() > 0
+        inside = touching & (in_folded == total)
+        details.append((inside, touching & ~inside))
+    return details
+
+
+def _join_folded_details(distances: np.ndarray, details: list[tuple[np.ndarray, np.ndarray]]) -> None:
+    """``distances`` [N,P] (each mesh vertex to each panel) changed in place so each folded detail
+    (``_folded_details``) is part of the panel most of its fold lies nearest (a tenth of a
+    millimetre nearer than its nearest), and its fold a border of that panel (as near it as its
+    nearest): the panels meet along the fold, where the detail is sewn on. A detail with no fold (a
+    loose piece) joins the panel most of it lies nearest."""
+    for inside, fold in details:
+        panel = np.bincount(distances[fold if fold.any() else inside].argmin(1)).argmax()
+        distances[inside, panel] = distances[inside].min(1) - 1e-4
+        distances[fold, panel] = distances[fold].min(1)
 
 
 def _vertex_panels(dart: Dart) -> np.ndarray:
@@ -77,7 +135,9 @@ def dart_from_mesh(template: Dart, vertices: np.ndarray, faces: np.ndarray, line
 
     template_vertices = np.asarray(template.vertices, np.float64)
     vertices = np.asarray(vertices, np.float64)
-    vertices, faces, labels, lines = cut_along_panels(vertices, faces, _panel_distances(template, vertices), lines)
+    distances = _panel_distances(template, vertices)
+    _join_folded_details(distances, _folded_details(template, vertices, faces))
+    vertices, faces, labels, lines = cut_along_panels(vertices, faces, distances, lines)
 
     # the cut: one copy of each vertex per panel it touches
     keys = np.stack([faces.reshape(-1), np.repeat(labels, 3)], 1)

@@ -16,8 +16,9 @@ two or three). Then:
    (at least ``MARGIN`` of the edge from either end);
    a triangle with one or two split edges is cut along the segment joining its border points into
    a triangle and a quadrilateral (two triangles), each a panel its vertices allow; one with three
-   (three panels meet inside it) into three corner quadrilaterals around the middle of its border
-   points. A triangle whose every vertex is on a border takes the panel nearest its corners.
+   (three panels meet inside it) into three corner quadrilaterals around the point where the three
+   borders meet (``_triple_point``). A triangle whose every vertex is on a border takes the panel
+   nearest its corners.
 3. A patch of one panel of under ``MIN_PATCH`` vertices (joined by edges) joins the panel around
    it before any of this.
 
@@ -93,6 +94,21 @@ def _snap(vertices: np.ndarray, faces: np.ndarray, distances: np.ndarray, allowe
     return vertices
 
 
+def _triple_point(corners: np.ndarray, distances: np.ndarray) -> np.ndarray:
+    """The point of the triangle ``corners`` [3,3] where the borders of its corners' three panels
+    meet. ``distances`` [3,3]: corner k's distance to corner j's panel. With every field linear over
+    the triangle, the barycentric weights w solve sum(w) = 1 and sum_k w_k (D[k,0] - D[k,1]) =
+    sum_k w_k (D[k,0] - D[k,2]) = 0; each weight is kept at least ``MARGIN`` (then renormalised), so
+    the point stays inside and cuts no sliver; a degenerate system gives the centroid."""
+    system = np.stack([np.ones(3), distances[:, 0] - distances[:, 1], distances[:, 0] - distances[:, 2]])
+    try:
+        weights = np.linalg.solve(system, [1.0, 0.0, 0.0])
+    except np.linalg.LinAlgError:
+        weights = np.full(3, 1.0 / 3.0)
+    weights = np.clip(weights, MARGIN, None)
+    return (weights / weights.sum()) @ corners
+
+
 def cut_along_panels(vertices: np.ndarray, faces: np.ndarray, distances: np.ndarray,
                      loops: dict[str, np.ndarray] | None = None,
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
@@ -152,7 +168,10 @@ def cut_along_panels(vertices: np.ndarray, faces: np.ndarray, distances: np.ndar
             add(face, face)
         elif count == 3:
             middle = len(points)
-            points.append(np.mean([points[c] for c in cuts], axis=0))
+            corner_panels = labels[face]
+            three = len(set(corner_panels.tolist())) == 3
+            points.append(_triple_point(vertices[face], distances[np.ix_(face, corner_panels)]) if three
+                          else np.mean([points[c] for c in cuts], axis=0))
             for k in range(3):
                 add([face[k], cuts[k], middle, cuts[k - 1]], [face[k]])
         elif count == 1:  # the cut edge a-b, c opposite
