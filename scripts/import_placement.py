@@ -58,8 +58,7 @@ def place_row(work: Path, row: int, body) -> tuple[str, list[tuple[float, float,
     fit = FitSurface(lower_arms(shipped, body, 0.0).body_vertices, body.faces, hull)  # the body at rest, as the import
     placement = align_to_template(vertices, faces, loops, CATEGORIES[draw["category"]], template.vertices,
                                   template.faces, template.lines, fit)
-    targets = {name: loop for name, loop in placement.lines.items() if name not in placement.folded}
-    refined = placed_on_edit(placement, vertices, shipped, fit, targets)
+    refined = placed_on_edit(placement, vertices, shipped, fit, placement.line_targets)
     original = welded(load_dart(stem.with_suffix(".original.npz")))
     surface = SurfaceDistance(np.asarray(original[0], np.float64), original[1])
     written = Rotation.from_euler("yx", [draw["yaw_deg"], draw["tilt_deg"]], degrees=True).as_matrix()

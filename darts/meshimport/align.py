@@ -109,6 +109,11 @@ class Alignment:
     folded: tuple[str, ...] = ()
     mirror: tuple[MirrorPlane, MirrorPlane] | None = None
 
+    @property
+    def line_targets(self) -> dict[str, np.ndarray]:
+        """The loops the registration pulls the template's lines onto: every named one but the folded."""
+        return {name: loop for name, loop in self.lines.items() if name not in self.folded}
+
 
 def umeyama(source: np.ndarray, target: np.ndarray, weights: np.ndarray | None = None,
             scale_range: tuple[float, float] = SCALE_RANGE) -> tuple[float, np.ndarray, np.ndarray]:

@@ -79,12 +79,12 @@ def _folded_details(template: Dart, vertices: np.ndarray, faces: np.ndarray) -> 
     sub = incidence[:, face_ids]
     adjacency = (sub.T @ sub) >= 2  # two folded triangles sharing an edge
     _, region = connected_components(adjacency, directed=False)
-    in_folded = np.asarray(sub.sum(1)).ravel()
-    total = np.asarray(incidence.sum(1)).ravel()
+    triangles = np.asarray(incidence.sum(1)).ravel()  # of each vertex
     details = []
     for r in np.flatnonzero(np.bincount(region) >= FOLD_MIN):
-        touching = np.asarray(sub[:, region == r].sum(1)).ravel() > 0
-        inside = touching & (in_folded == total)
+        in_region = np.asarray(sub[:, region == r].sum(1)).ravel()  # each vertex's triangles in region r
+        touching = in_region > 0
+        inside = touching & (in_region == triangles)
         details.append((inside, touching & ~inside))
     return details
 

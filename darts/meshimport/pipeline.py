@@ -148,15 +148,14 @@ def import_garment(path: str | os.PathLike, options: ImportOptions | None = None
     if options.transform is None:
         best, lowered, surface, _ = candidates[0]
         say("placing the mesh on its openings' fitted edit")
-        targets = {name: loop for name, loop in best.lines.items() if name not in best.folded}
-        candidates.append((placed_on_edit(best, vertices, lowered.template, surface, targets), lowered, surface, True))
+        candidates.append((placed_on_edit(best, vertices, lowered.template, surface, best.line_targets), lowered, surface,
+                           True))
     registered = []  # (two-way mean, alignment, lowered, placed mesh, dart, fit, distances, on the edit) per placement
     for alignment, lowered, surface, on_edit in candidates:
         say(f"registering the {category} template onto the mesh" + (f", arms lowered {lowered.degrees:g} deg"
                                                                      if lowered.degrees else ""))
         placed = apply_matrix(alignment.matrix, vertices)
-        targets = {name: loop for name, loop in alignment.lines.items() if name not in alignment.folded}
-        dart, fit, distances = register_template(lowered.template, body, placed, faces, targets, surface)
+        dart, fit, distances = register_template(lowered.template, body, placed, faces, alignment.line_targets, surface)
         registered.append((fit["dart_to_mesh"]["mean_mm"] + fit["mesh_to_dart"]["mean_mm"], alignment, lowered, placed,
                            dart, fit, distances, on_edit))
     _, alignment, lowered, placed, posed, fit, distances, on_edit = min(registered, key=lambda r: r[0])
