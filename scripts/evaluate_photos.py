@@ -16,7 +16,8 @@ Measures per picture (256 x 256 pixels):
   true mask given), against the truth;
 - **parsing** (``darts.photo.outfit``, issue 44): the garment of the picture's kind (upper, lower,
   dress) among those read: its category against the truth, its parsed mask against the true
-  garment mask (IoU);
+  garment mask (IoU); and per garment, the other garment worn (``meta.json``'s ``other``, when
+  there is one) read as its own kind, its category against the truth too;
 - **garment network** (the previous method, when its weights are shipped): its mask (``segment_garment`` on the crop
   around the found person) against the true garment mask (IoU), and its category.
 With ``--reconstruct`` (on every ``--every``-th picture), ``darts.regress.pipeline.reconstruct``
@@ -148,7 +149,8 @@ def main() -> None:
         garment_mask = np.asarray(Image.open(folder / "mask.png")) > 127
         keypoints = read_npz(folder / "keypoints.npz")
         camera = Camera.from_json(folder / "camera.json")
-        row = {"sample": f"{folder.parent.name}/{folder.name}", "category": meta["category"], "motion": meta["motion"]}
+        row = {"sample": f"{folder.parent.name}/{folder.name}", "category": meta["category"], "other": meta.get("other"),
+               "motion": meta["motion"]}
         start = time.process_time()
         person = find_person(image)
         row["person_s"] = time.process_time() - start
@@ -179,6 +181,9 @@ def main() -> None:
             read = outfit.garment(kind) if outfit else None
             row["parsing_category"] = read.category if read else None
             row["parsing_garments"] = [g.category for g in outfit.garments] if outfit else []
+            if row["other"]:  # the other garment worn, read as its own kind
+                other = outfit.garment(KIND_OF[row["other"]]) if outfit else None
+                row["parsing_other_category"] = other.category if other else None
             parsed = outfit.mask(kind) if outfit else np.zeros_like(garment_mask)
             row["parsing_mask_iou"] = float((parsed & garment_mask).sum() / max((parsed | garment_mask).sum(), 1))
             if network:
@@ -213,6 +218,9 @@ def main() -> None:
     summary["parsing"] = {
         "mask_iou_median": float(np.median([r["parsing_mask_iou"] for r in found])) if found else None,
         "category_accuracy": float(np.mean([r.get("parsing_category") == r["category"] for r in rows])),
+        "category_accuracy_every_garment": float(np.mean(
+            [r.get("parsing_category") == r["category"] for r in rows]
+            + [r.get("parsing_other_category") == r["other"] for r in rows if r.get("other")])),
         "category_accuracy_per_category": {
             c: float(np.mean([r.get("parsing_category") == c for r in rows if r["category"] == c]))
             for c in sorted({r["category"] for r in rows})}}
