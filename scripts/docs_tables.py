@@ -228,6 +228,9 @@ def posed_renders(name: str) -> Callable[[], list[str]]:
         if "parsing" in summary:
             table.append(f"| category: the parsing (every garment read, the one of the picture's kind) | "
                          f"**{100 * summary['parsing']['category_accuracy']:.1f} %** |")
+            if "category_accuracy_every_garment" in summary["parsing"]:
+                table.append(f"| category: the parsing, every garment worn (the other one too) | "
+                             f"{100 * summary['parsing']['category_accuracy_every_garment']:.1f} % |")
         table += [f"| category: the garment network | {100 * summary['garment_network']['category_accuracy']:.1f} % |",
                   f"| category: the shipped classifier on the whole picture / on the garment alone (true mask) | "
                   f"{100 * summary['category_accuracy']:.1f} % / {100 * summary['category_accuracy_garment_alone']:.1f} % |"]

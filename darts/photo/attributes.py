@@ -1,5 +1,6 @@
-"""What a parsed photograph says of the garments: sleeve length, the lower garment's kind and length,
-one piece or two — measured along the limbs — and the categories that follow, with probabilities.
+"""What a parsed photograph says of the garments — where the cloth gives way to skin along the
+limbs, the fill between the legs, how a hem hangs, the colour test of one piece or two — and the
+garments and categories that follow, with probabilities.
 
 Each limb is a polyline of BlazePose landmarks (arm: shoulder, elbow, wrist; leg: hip, knee, ankle)
 in the parsing's crop pixels. Every person pixel of the limb's body parts (the parsing's nearest
@@ -14,31 +15,30 @@ when the limb leaves it covered: ``beyond_picture``).
 A limb bare where it first comes into view (past s = 0.2) has its end hidden and is left out; of
 two limbs the shorter end counts (``_garment_end``).
 
-- **Sleeves**: the arms' end (an arm out of sight left out); P(none) = sigma((0.12 -
-  s) / 0.03), P(long) = sigma((s - 0.49) / 0.04) (a sleeve past the elbow: rolled and 3/4
-  sleeves are long sleeves), P(short) the rest; a sleeve covered out of the picture from at least
-  s = 0.3 is long at 0.6 or more.
-- **Lower garment's length**: the legs' ends; P(long) = sigma((s - 0.55) / 0.05) (the knee is 0.5).
+- **Sleeves**: the arms' end (``sleeve_end``; an arm out of sight left out).
+- **Lower garment's length**: the legs' end (``hem_end``).
 - **A top's length**: its end down the body's middle line (``torso_line``: shoulders, hips,
   knees), measured the same way (``top_hem_end``).
-- **Skirt or pants**: the gap between the legs down to the hem — inside the polygon of the two
-  legs' polylines, off the fitted body's silhouette (below its crotch) — and the share of it that
-  is the garment's cloth against background (a skirt fills the gap, trousers leave it open; skin
-  there is a leg the fit put elsewhere); P(skirt) = sigma((fill - 0.65) / 0.06), read for hems
-  past s = 0.45 (above it, where the legs part, the gap is the garment's own crotch). Where no gap
-  is read (a short garment; legs together, crossed or seen from the side; knees not seen), how
-  the garment hangs at its hem: the share of its leg pixels from 0.6 of its hem's s down that lie
-  off the fitted body's silhouette, P(skirt) = sigma((off - 0.2) / 0.04) (``off_the_legs``: a skirt
-  stands away from the thighs at its hem, shorts and trousers follow them); with the hem out of
-  the picture, neither: ``SKIRT_PRIOR``. One cloth from the shoulders down is a dress unless the gap is clearly open
-  (fill under 0.35): then a suit, a top and trousers.
+- **The gap between the legs** down to the hem — inside the polygon of the two legs' polylines,
+  off the fitted body's silhouette (below its crotch) — and the share of it that is the garment's
+  cloth against background (``between_legs_fill``: a skirt fills the gap, trousers leave it open;
+  skin there is a leg the fit put elsewhere), read for hems past ``MIN_GAP_HEM`` with both knees
+  seen.
+- **How the hem hangs**: the share of the garment's leg pixels from ``HEM_BAND`` of its hem's s
+  down that lie off the fitted body's silhouette (``off_the_legs``).
+
+The cloth is measured both ways (``measure``): the parsing's upper and lower cloth as a top and a
+lower garment, and the two as one dress. ``darts.photo.outfit_net`` decides from the parsing and
+both measurements — one piece or two, the sleeves (none, short, long), the lower garment long or
+short, skirt or trousers — and the categories' probabilities follow: a top's or a dress's are the
+sleeves', a lower garment's P(long or short) x P(skirt or trousers). A one-colour cloth decided
+to be two garments (a suit) is split at the hips (``Parsing.split_one_piece``).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import expit
 
 from darts.body.segmentation import PART_INDEX
 from darts.photo.parsing import BACKGROUND, DRESS, LOWER, SKIN, UPPER, Parsing
@@ -55,23 +55,18 @@ REACH = 0.12
 TORSO_REACH = 0.15
 #: the least gap between the legs (crop pixels, of 256) that says anything of what fills it
 MIN_GAP_PIXELS = 25
-#: the sleeve end (s) at which short and long sleeves are as likely: past the elbow (0.5 less a
-#: little: the elbow's landmark sits inside the joint)
-LONG_SLEEVE = 0.49
-#: P(none / short / long) of sleeves no arm shows
-SLEEVE_PRIOR = {"none": 0.15, "short": 0.4, "long": 0.45}
-#: the share of cloth in the gap between the legs at which a skirt and trousers are as likely, and
-#: the hem (s) above which there is a gap to read
-SKIRT_FILL, MIN_GAP_HEM = 0.65, 0.45
-#: one cloth from the shoulders down is taken for a suit (a top and trousers) only under this fill
-SUIT_FILL = 0.35
-#: with no gap to read, the share of a long garment's leg pixels off the fitted legs at which a
-#: skirt and trousers are as likely
-SKIRT_OFF_BODY = 0.2
+#: per decision, the weight of the hand-set rules' log-probabilities against the network's
+#: (``combine``): the sleeves and skirt-or-trousers by both (0.3: the validation renders' best
+#: single weight), one piece or two and the length by the rules alone, where the network trained on
+#: renders read the development photographs worse (a one-colour dress as two garments, trousers
+#: running out of a half-length picture as shorts)
+RULE_WEIGHTS = {"one_piece": 1.0, "sleeves": 0.3, "long": 1.0, "skirt": 0.3}
+#: the least probability an expert gives a class in ``combine``
+FLOOR = 1e-3
+#: the hem (s) above which there is a gap between the legs to read
+MIN_GAP_HEM = 0.45
 #: the lower part of a garment, from this share of its hem's s down, says how it hangs
 HEM_BAND = 0.6
-#: P(skirt) when no gap between the legs shows
-SKIRT_PRIOR = 0.35
 ARM = ("shoulder", "elbow", "wrist")
 LEG = ("hip", "knee", "ankle")
 
@@ -200,14 +195,6 @@ def between_legs_fill(parsing: Parsing, legs: list[np.ndarray], cloth: tuple[int
     return float(covered.sum() / seen.sum())
 
 
-def _sleeve_probabilities(end: float) -> dict[str, float]:
-    none = float(expit((0.12 - end) / 0.03))
-    long = float(expit((end - LONG_SLEEVE) / 0.04))
-    short = max(0.0, 1.0 - none - long)
-    total = none + short + long
-    return {"none": none / total, "short": short / total, "long": long / total}
-
-
 @dataclass
 class GarmentGuess:
     """One visible garment: its ``kind`` (upper, lower, dress), the parsing label of its pixels,
@@ -235,22 +222,15 @@ def _ranked(probabilities: dict[str, float]) -> list[tuple[str, float]]:
     return sorted(probabilities.items(), key=lambda item: -item[1])
 
 
-def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) -> tuple[dict, dict[str, float]]:
-    """(evidence, P(none / short / long)) of the sleeves of the garment labelled ``cloth``; with no
-    arm read the sleeves take ``SLEEVE_PRIOR``. (Leaving out arms whose elbow BlazePose does not
-    see was measured and dropped: 69.2 % of the posed renders' categories with it, 70.0 % without,
-    no photograph changed.)"""
+def _sleeves(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) -> dict:
+    """The evidence of the sleeves of the garment labelled ``cloth``: the arms' coverage, their
+    ends and the garment's (the shorter), and whether it runs out of the picture."""
     arms = {side: limb_coverage(parsing, chain(landmarks, side, ARM), [f"{side}_upper_arm", f"{side}_forearm",
                                                                        f"{side}_hand"], cloth)
             for side in ("left", "right")}
     end, beyond = _garment_end(list(arms.values()))
-    probabilities = _sleeve_probabilities(end) if end is not None else dict(SLEEVE_PRIOR)
-    if beyond and end >= 0.3 and probabilities["long"] < 0.6:  # covered out of the picture: at least this long
-        probabilities = {"none": 0.0, "short": 0.4, "long": 0.6}
-    evidence = {"sleeve_end": None if end is None else round(end, 3), "sleeve_beyond_picture": beyond,
-                "arms": {k: v.as_dict() for k, v in arms.items()},
-                "sleeve": max(probabilities, key=probabilities.get) if end is not None else None}
-    return evidence, probabilities
+    return {"sleeve_end": None if end is None else round(end, 3), "sleeve_beyond_picture": beyond,
+            "arms": {k: v.as_dict() for k, v in arms.items()}}
 
 
 def torso_line(landmarks: np.ndarray) -> np.ndarray:
@@ -273,31 +253,20 @@ def _top_hem(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...]) ->
     return {"top_hem_end": None if torso.end is None else round(torso.end, 3), "torso": torso.as_dict()}
 
 
-def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...],
-           read_gap: bool = True) -> tuple[dict, float | None, float | None, float | None]:
-    """(evidence, P(long), P(skirt), the fill between the legs) of the garment below the waist
-    labelled ``cloth``."""
+def _lower(parsing: Parsing, landmarks: np.ndarray, cloth: tuple[int, ...], read_gap: bool = True) -> dict:
+    """The evidence of the garment below the waist labelled ``cloth``: the legs' coverage, the hem's
+    end (the shorter leg's) and whether it runs out of the picture, the fill between the legs
+    (``read_gap``: both knees seen) and how the hem hangs off the legs."""
     polylines = {side: chain(landmarks, side, LEG) for side in ("left", "right")}
     legs = {side: limb_coverage(parsing, polylines[side], [f"{side}_thigh", f"{side}_calf", f"{side}_foot"], cloth)
             for side in ("left", "right")}
     end, beyond = _garment_end(list(legs.values()))
     fill = between_legs_fill(parsing, list(polylines.values()), cloth, end if end is not None else 0.5) if read_gap else None
-    p_long = None if end is None else float(expit((end - 0.55) / 0.05))
-    if beyond and p_long is not None and p_long < 0.6:
-        p_long = 0.6  # the hem is out of the picture: at least this long, more likely long than short
-    # how the garment hangs at its hem, where the hem is in the picture
     off_body = None if end is None or beyond else off_the_legs(parsing, polylines, cloth, end)
-    if fill is not None:
-        p_skirt = float(expit((fill - SKIRT_FILL) / 0.06))
-    elif off_body is not None:
-        p_skirt = float(expit((off_body - SKIRT_OFF_BODY) / 0.04))
-    else:
-        p_skirt = None
-    evidence = {"hem_end": None if end is None else round(end, 3), "hem_beyond_picture": beyond,
-                "between_legs_fill": None if fill is None else round(fill, 3),
-                "off_the_legs": None if off_body is None else round(off_body, 3),
-                "legs": {k: v.as_dict() for k, v in legs.items()}}
-    return evidence, p_long, p_skirt, fill
+    return {"hem_end": None if end is None else round(end, 3), "hem_beyond_picture": beyond,
+            "between_legs_fill": None if fill is None else round(fill, 3),
+            "off_the_legs": None if off_body is None else round(off_body, 3),
+            "legs": {k: v.as_dict() for k, v in legs.items()}}
 
 
 def off_the_legs(parsing: Parsing, legs: dict[str, np.ndarray], cloth: tuple[int, ...], hem: float) -> float | None:
@@ -326,26 +295,115 @@ def _share(parsing: Parsing, label: int) -> float:
     return float((parsing.labels == label).sum() / max((parsing.labels != BACKGROUND).sum(), 1))
 
 
+def _separates(parsing: Parsing, points: np.ndarray, knees: bool) -> tuple[dict | None, dict | None]:
+    """(the top's evidence, the lower garment's) of ``parsing``'s upper and lower cloth; None for a
+    garment under ``MIN_GARMENT_SHARE`` of the person."""
+    top = _sleeves(parsing, points, (UPPER,)) | _top_hem(parsing, points, (UPPER,)) \
+        if _share(parsing, UPPER) >= MIN_GARMENT_SHARE else None
+    lower = _lower(parsing, points, (LOWER,), knees) if _share(parsing, LOWER) >= MIN_GARMENT_SHARE else None
+    return top, lower
+
+
+@dataclass
+class Measured:
+    """A parsed person's cloth measured both ways: as a ``top`` and a ``lower`` garment (the
+    parsing's upper and lower labels) and as one ``dress`` (the two labels one: ``whole``); each
+    evidence dict None when that garment is under ``MIN_GARMENT_SHARE``; ``points`` the
+    landmarks in crop pixels, ``knees`` whether both are seen."""
+
+    parsing: Parsing
+    whole: Parsing
+    points: np.ndarray
+    visibility: np.ndarray
+    knees: bool
+    top: dict | None
+    lower: dict | None
+    dress: dict | None
+
+    def network_inputs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(maps, thighs, scalars) of ``darts.photo.outfit_net`` for this person."""
+        from darts.photo import outfit_net
+
+        parsing = self.parsing
+        return (*outfit_net.maps(parsing.labels, parsing.body_parts, parsing.in_picture(), self.points),
+                outfit_net.scalars(self.top, self.lower, self.dress, parsing.evidence, self.visibility))
+
+
+def measure(parsing: Parsing, landmarks: np.ndarray, visibility: np.ndarray | None = None) -> Measured:
+    """``parsing``'s cloth measured both ways (``Measured``); BlazePose's ``landmarks`` [33,2] in
+    picture pixels with their ``visibility`` [33] (all seen when None)."""
+    points = parsing.to_crop(landmarks)
+    visibility = np.ones(len(landmarks)) if visibility is None else np.asarray(visibility, np.float64)
+    knees = _knees_seen(visibility)
+    top, lower = _separates(parsing, points, knees)
+    whole = parsing.merged()
+    dress = _sleeves(whole, points, (DRESS,)) | _lower(whole, points, (DRESS,), knees) \
+        if _share(whole, DRESS) >= MIN_GARMENT_SHARE else None
+    return Measured(parsing, whole, points, visibility, knees, top, lower, dress)
+
+
+def combine(rules: dict[str, dict[str, float]], network: dict[str, dict[str, float]], weights: dict[str, float]
+            ) -> dict[str, dict[str, float]]:
+    """Per decision, the two experts' probabilities multiplied, the rules' raised to its weight w in
+    ``weights`` and the network's to 1 - w (a weighted geometric mean, each clipped at ``FLOOR``),
+    and normalised."""
+    out = {}
+    for name, classes in network.items():
+        weight = weights[name]
+        logs = {c: weight * np.log(max(rules[name][c], FLOOR)) + (1 - weight) * np.log(max(p, FLOOR))
+                for c, p in classes.items()}
+        top = max(logs.values())
+        total = sum(np.exp(v - top) for v in logs.values())
+        out[name] = {c: float(np.exp(v - top) / total) for c, v in logs.items()}
+    return out
+
+
 def garments_seen(parsing: Parsing, landmarks: np.ndarray, visibility: np.ndarray | None = None
                   ) -> tuple[list[GarmentGuess], list[str], Parsing]:
     """(every visible garment, outermost last: the lower garment, then the top or the dress;
-    notes on what could not be seen; the parsing as read: a one-piece cloth read as a suit split
-    into its two garments' labels) of a parsed person whose BlazePose ``landmarks`` [33,2] are in
-    picture pixels, with their ``visibility`` [33] (module docstring)."""
-    points = parsing.to_crop(landmarks)
-    garments, notes = [], []
-    if _share(parsing, DRESS) >= MIN_GARMENT_SHARE:
-        lower, _, _, fill = _lower(parsing, points, (DRESS,), _knees_seen(visibility))
-        if fill is not None and fill < SUIT_FILL:  # one colour, trousers seen below: a suit, two garments
-            notes.append("one cloth from the shoulders to the legs but trousers below: taken as a top and trousers")
-            suit = parsing.split_one_piece()
-            return (*_separates(suit, points, notes, visibility), suit)
-        sleeves, p_sleeve = _sleeves(parsing, points, (DRESS,))
-        attributes = {**sleeves, **lower, "one_piece": parsing.evidence}
+    notes on what could not be seen; the parsing as read: its upper and lower cloth one dress, or
+    a one-colour cloth split at the hips into a top and a lower garment) of a parsed person whose
+    BlazePose ``landmarks`` [33,2] are in picture pixels, with their ``visibility`` [33]. The
+    cloth is measured both ways (``measure``) and ``darts.photo.outfit_net`` decides from the
+    parsing and both measurements: one piece or two, the sleeves, the lower garment's length and
+    kind; each garment's attributes are its measurements, the sleeves decided and P(one piece)."""
+    from darts.photo.outfit_net import decide
+    from darts.photo.rules import rule_probabilities, within_picture_bounds
+
+    measured = measure(parsing, landmarks, visibility)
+    network = decide(*measured.network_inputs())
+    decided = within_picture_bounds(combine(rule_probabilities(measured), network, RULE_WEIGHTS), measured)
+    evidence = {"p_one_piece": round(decided["one_piece"]["one"], 4),
+                "network": {name: {c: round(p, 4) for c, p in classes.items()} for name, classes in network.items()},
+                "colour": parsing.evidence}
+    sleeves = decided["sleeves"]
+    sleeve = {"sleeve": max(sleeves, key=sleeves.get)}
+    if measured.dress is not None and decided["one_piece"]["one"] > 0.5:
         names = {"long": "long-sleeve-dress", "short": "short-sleeve-dress", "none": "sleeveless-dress"}
-        garments.append(GarmentGuess("dress", DRESS, _ranked({names[k]: p for k, p in p_sleeve.items()}), attributes))
-        return garments, notes, parsing
-    return (*_separates(parsing, points, notes, visibility), parsing)
+        return [GarmentGuess("dress", DRESS, _ranked({names[k]: p for k, p in sleeves.items()}),
+                             {**measured.dress, **sleeve, **evidence})], [], measured.whole
+    top, lower, read, notes = measured.top, measured.lower, parsing, []
+    if parsing.one_piece:  # one colour read as two garments: a suit, split at the hips
+        notes.append("one cloth from the shoulders to the legs, read as a top and a lower garment")
+        read = measured.whole.split_one_piece()
+        top, lower = _separates(read, measured.points, measured.knees)
+    garments = []
+    if lower is not None:
+        if lower["hem_end"] is None:
+            notes.append("the lower garment is not seen along the legs: its kind and length are guessed")
+        p_long, p_skirt = decided["long"]["long"], decided["skirt"]["skirt"]
+        probabilities = {"long-pants": (1 - p_skirt) * p_long, "short-pants": (1 - p_skirt) * (1 - p_long),
+                         "long-skirt": p_skirt * p_long, "short-skirt": p_skirt * (1 - p_long)}
+        garments.append(GarmentGuess("lower", LOWER, _ranked(probabilities), {**lower, **evidence}))
+    else:
+        notes.append("no lower garment in the picture (the legs are out of frame or bare)")
+    if top is not None:
+        names = {"long": "long-sleeve-top", "short": "short-sleeve-top", "none": "sleeveless-top"}
+        garments.append(GarmentGuess("upper", UPPER, _ranked({names[k]: p for k, p in sleeves.items()}),
+                                     {**top, **sleeve, **evidence}))
+    else:
+        notes.append("no upper garment in the picture")
+    return garments, notes, read
 
 
 def _seen(visibility: np.ndarray | None, landmark: str) -> bool:
@@ -361,26 +419,3 @@ def _knees_seen(visibility: np.ndarray | None) -> bool:
     return _seen(visibility, "left_knee") and _seen(visibility, "right_knee")
 
 
-def _separates(parsing: Parsing, points: np.ndarray, notes: list[str],
-               visibility: np.ndarray | None) -> tuple[list[GarmentGuess], list[str]]:
-    """The lower garment and the top of a person in two garments (crop pixels ``points``)."""
-    garments = []
-    if _share(parsing, LOWER) >= MIN_GARMENT_SHARE:
-        lower, p_long, p_skirt, _ = _lower(parsing, points, (LOWER,), _knees_seen(visibility))
-        if p_long is None:
-            notes.append("the lower garment is not seen along the legs: its kind and length are guessed")
-        p_long = 0.5 if p_long is None else p_long
-        p_skirt = SKIRT_PRIOR if p_skirt is None else p_skirt
-        probabilities = {"long-pants": (1 - p_skirt) * p_long, "short-pants": (1 - p_skirt) * (1 - p_long),
-                         "long-skirt": p_skirt * p_long, "short-skirt": p_skirt * (1 - p_long)}
-        garments.append(GarmentGuess("lower", LOWER, _ranked(probabilities), lower))
-    else:
-        notes.append("no lower garment in the picture (the legs are out of frame or bare)")
-    if _share(parsing, UPPER) >= MIN_GARMENT_SHARE:
-        sleeves, p_sleeve = _sleeves(parsing, points, (UPPER,))
-        names = {"long": "long-sleeve-top", "short": "short-sleeve-top", "none": "sleeveless-top"}
-        garments.append(GarmentGuess("upper", UPPER, _ranked({names[k]: p for k, p in p_sleeve.items()}),
-                                     {**sleeves, **_top_hem(parsing, points, (UPPER,))}))
-    else:
-        notes.append("no upper garment in the picture")
-    return garments, notes

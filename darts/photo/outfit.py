@@ -44,7 +44,7 @@ class PhotoOutfit:
 
     def as_dict(self) -> dict:
         return {"garments": [g.as_dict() for g in self.garments], "notes": self.notes,
-                "one_piece": self.parsing.one_piece, "colour_evidence": self.parsing.evidence}
+                "one_colour": self.parsing.one_piece, "colour_evidence": self.parsing.evidence}
 
 
 def read_outfit(image: np.ndarray, person, fit, body) -> PhotoOutfit | None:

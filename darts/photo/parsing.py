@@ -12,10 +12,11 @@ lower garment, one-piece (dress), skin, face and hair, other — from what the b
       -> per pixel, log p(colour | class) + log prior(class | zone) (``ZONE_PRIORS``: a thigh is
          lower cloth or skin, an upper arm upper cloth or skin, ...), smoothed over the picture
          (Gaussian, ``SMOOTH`` pixels) and the best class taken
-      -> **one piece or two**: the lower cloth's colours explained by the upper cloth's model
-         within ``ONE_PIECE_NATS`` a pixel (median) of its own, and the upper's by the lower's
-         within twice that (a top may show more colours than a skirt): one cloth, whose two labels
-         become one (``darts.photo.attributes`` then tells a dress from a suit by the legs).
+      -> **the colour test of one piece or two** (evidence, not the decision): the lower cloth's
+         colours explained by the upper cloth's model within ``ONE_PIECE_NATS`` a pixel (median)
+         of its own, and the upper's by the lower's within twice that (a top may show more colours
+         than a skirt): one colour. The labels keep the upper and lower cloth apart;
+         ``darts.photo.attributes`` reads them both ways and decides (``Parsing.merged``: one).
 
 Everything runs on a square crop around the person resampled to ``SIZE`` pixels (the labels are
 drawn back to the picture's pixels); arrays are [row, column], the picture's axes.
@@ -81,9 +82,14 @@ class Parsing:
     labels: np.ndarray
     parts: np.ndarray
     body_parts: np.ndarray  # [S,S] the fitted body's part seen at each pixel (-1: off the body)
-    one_piece: bool
+    one_piece: bool  # the colour test: the upper and lower cloth one colour (``_one_piece``)
     picture_size: tuple[int, int]  # (width, height) of the picture the crop was taken from
     evidence: dict = field(default_factory=dict)
+
+    def merged(self) -> Parsing:
+        """The same parsing with its upper and lower cloth one garment (``DRESS``)."""
+        labels = np.where((self.labels == UPPER) | (self.labels == LOWER), DRESS, self.labels).astype(self.labels.dtype)
+        return replace(self, labels=labels)
 
     def split_one_piece(self) -> Parsing:
         """The same parsing with the one-piece cloth taken as two garments of one colour (a suit):
@@ -254,8 +260,6 @@ def parse_person(image: np.ndarray, person_mask: np.ndarray, landmarks: np.ndarr
             scores[label][here] = np.maximum(densities[label][here], -60.0) + prior
     scores = np.stack([ndimage.gaussian_filter(np.where(np.isfinite(s), s, -200.0), SMOOTH) for s in scores])
     labels = np.where(person, scores.argmax(0), BACKGROUND).astype(np.uint8)
-    if one_piece:
-        labels[(labels == UPPER) | (labels == LOWER)] = DRESS
     evidence["skin_samples"] = int(skin_source.sum())
     return Parsing(crop, labels, parts, seen, one_piece, (image.shape[1], image.shape[0]), evidence)
 

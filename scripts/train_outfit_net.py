@@ -1,0 +1,272 @@
+"""Train the network that decides a photograph's garments from the parsing (darts.photo.outfit_net).
+
+    python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 [--epochs 40] [--seed 0]
+                                       [--workers 2] [--out darts/photo/weights/outfit_net.pt]
+    python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s101 --evaluate
+
+Data: every picture of a posed dataset (``darts dataset make DIR --count 2400 --seed 100 --posed
+--views 6``: the garment worn and ``meta.json``'s ``other`` garment with it, posed bodies, free
+cameras, clutter), read as a photograph is: BlazePose's person, the body fitted to it
+(``darts.photo.fit``), the parsing (``darts.photo.parsing``) and its measurements both ways
+(``darts.photo.attributes.measure``), which give the network's inputs. A picture without a person
+is left out. The person and the fit (about 1 s a picture) are cached per picture in
+``~/.cache/darts/outfit_net/<dataset>/fits/`` (resumable, ``--workers`` processes of one torch
+thread), the inputs in ``inputs.npz`` beside them (``--rebuild-inputs`` after a change to the
+parsing or the measurements).
+
+Targets, from the outfit worn: one piece (a dress) or two; the sleeves of the top or the dress;
+the lower garment long or short, skirt or trousers (a dress has no lower-garment targets).
+Loss: the sum of the heads' cross-entropies over the targets a picture has. Augmentation: the
+mirror image half of the time (both maps). AdamW (lr 2e-3, weight decay 1e-3, cosine to 0), batches of 32;
+the checkpoint kept is the epoch with the best validation score (the share of the validation
+part's garments, both of each picture, whose category is right), and its record holds the
+command, the data, the seed and the numbers.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pickle
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+#: each category's targets: (kind, sleeves) or ("lower", (long, skirt))
+TARGETS = {"long-sleeve-top": ("upper", 2), "short-sleeve-top": ("upper", 1), "sleeveless-top": ("upper", 0),
+           "long-sleeve-dress": ("dress", 2), "short-sleeve-dress": ("dress", 1), "sleeveless-dress": ("dress", 0),
+           "long-pants": ("lower", (1, 0)), "short-pants": ("lower", (0, 0)), "long-skirt": ("lower", (1, 1)),
+           "short-skirt": ("lower", (0, 1))}
+
+
+def targets(categories: list[str]) -> dict[str, int]:
+    """Per head (``outfit_net.HEADS``) the class of the outfit of ``categories``; -1: none."""
+    out = {"one_piece": -1, "sleeves": -1, "long": -1, "skirt": -1}
+    for category in categories:
+        kind, value = TARGETS[category]
+        if kind == "lower":
+            out["one_piece"] = 0
+            out["long"], out["skirt"] = value
+        else:
+            out["one_piece"], out["sleeves"] = int(kind == "dress"), value
+    return out
+
+
+def _fit_pictures(job: tuple[list[Path], Path]) -> int:
+    """Cache BlazePose's person and the body fit of each picture folder (one process)."""
+    import torch
+    from PIL import Image
+
+    from darts.body.io import load_body
+    from darts.photo.fit import fit_body
+    from darts.photo.person import find_person
+
+    torch.set_num_threads(1)
+    folders, cache = job
+    body = load_body(None)
+    for folder in folders:
+        target = cache / f"{folder.parent.name}__{folder.name}.pkl"
+        if target.exists():
+            continue
+        image = np.asarray(Image.open(folder / "image.png").convert("RGB"))
+        person = find_person(image)
+        fit = fit_body(person, body, image.shape[1], image.shape[0]) if person is not None else None
+        meta = json.loads((folder / "meta.json").read_text())
+        temporary = target.with_suffix(".tmp")
+        temporary.write_bytes(pickle.dumps({"folder": str(folder), "meta": meta, "person": person, "fit": fit}))
+        temporary.rename(target)
+    return len(folders)
+
+
+def fit_all(data: Path, cache: Path, workers: int) -> None:
+    """Every picture of ``data`` fitted into ``cache`` (resumable)."""
+    from multiprocessing import get_context
+
+    cache.mkdir(parents=True, exist_ok=True)
+    folders = sorted(p.parent for p in data.glob("*/g*-*/image.png"))
+    todo = [f for f in folders if not (cache / f"{f.parent.name}__{f.name}.pkl").exists()]
+    print(f"{len(folders)} pictures, {len(todo)} to fit", flush=True)
+    if todo:
+        with get_context("spawn").Pool(workers) as pool:
+            pool.map(_fit_pictures, [(todo[k::workers], cache) for k in range(workers)])
+
+
+def build_inputs(cache: Path) -> dict[str, np.ndarray]:
+    """The network's inputs and targets of every cached fit with a person: ``maps`` [N,C,M,M] and
+    ``thighs`` [N,C,T,T] float16, ``scalars`` [N,S], a target per head [N], the rules' probabilities
+    per head (``rules_<head>`` [N,classes]), ``val`` [N] bool, ``samples``, ``outfits``."""
+    from PIL import Image
+
+    from darts.body.io import load_body
+    from darts.body.segmentation import body_segmentation
+    from darts.photo.attributes import measure
+    from darts.photo.outfit_net import HEADS
+    from darts.photo.parsing import parse_person
+    from darts.photo.rules import rule_probabilities
+
+    body = load_body(None)
+    parts = body_segmentation(body)
+    arrays = {"maps": [], "thighs": [], "scalars": [], "val": [], "samples": [], "outfits": []}
+    heads = {name: [] for name in targets([])}
+    rules = {name: [] for name in HEADS}
+    for path in sorted(cache.glob("*.pkl")):
+        record = pickle.loads(path.read_bytes())
+        person, fit, meta = record["person"], record["fit"], record["meta"]
+        if person is None:
+            continue
+        image = np.asarray(Image.open(Path(record["folder"]) / "image.png").convert("RGB"))
+        parsing = parse_person(image, person.mask, person.landmarks, person.visibility, fit.vertices,
+                               np.asarray(body.faces), parts, fit.posed_camera)
+        if parsing is None:
+            continue
+        measured = measure(parsing, person.landmarks, person.visibility)
+        maps, thighs, scalars = measured.network_inputs()
+        for name, probabilities in rule_probabilities(measured).items():
+            rules[name].append([probabilities[c] for c in HEADS[name]])
+        outfit = [meta["category"]] + ([meta["other"]] if meta.get("other") else [])
+        for name, value in targets(outfit).items():
+            heads[name].append(value)
+        arrays["maps"].append(maps.astype(np.float16))
+        arrays["thighs"].append(thighs.astype(np.float16))
+        arrays["scalars"].append(scalars)
+        arrays["val"].append(meta["split"] != "train")
+        arrays["samples"].append(path.stem)
+        arrays["outfits"].append(",".join(outfit))
+    return {**{k: np.array(v) for k, v in arrays.items()}, **{k: np.array(v) for k, v in heads.items()},
+            **{f"rules_{k}": np.array(v) for k, v in rules.items()}}
+
+
+def outfit_right(probabilities: dict[str, np.ndarray], arrays: dict[str, np.ndarray]) -> np.ndarray:
+    """[N,2] per picture, whether each garment's category follows right (the second: no second
+    garment counts as right) from the heads' ``probabilities``."""
+    one = probabilities["one_piece"].argmax(1) == 1
+    truth_one = arrays["one_piece"] == 1
+    sleeves = probabilities["sleeves"].argmax(1) == arrays["sleeves"]
+    lower = (probabilities["long"].argmax(1) == arrays["long"]) & (probabilities["skirt"].argmax(1) == arrays["skirt"])
+    upper_right = (one == truth_one) & sleeves
+    lower_right = np.where(truth_one, True, ~one & lower)
+    return np.stack([upper_right, lower_right], 1)
+
+
+def garment_score(probabilities: dict[str, np.ndarray], arrays: dict[str, np.ndarray]) -> float:
+    """The share of garments (a dress, or a top and a lower garment) whose category is right."""
+    right = outfit_right(probabilities, arrays)
+    garments = np.where(arrays["one_piece"] == 1, 1, 2)
+    return float(np.where(garments == 1, right[:, 0], right.sum(1)).sum() / garments.sum())
+
+
+def train(arrays: dict[str, np.ndarray], epochs: int, seed: int, width: int, log=print):
+    """(the best network by validation score, its epoch, the score) trained on ``arrays``."""
+    import copy
+
+    import torch
+
+    from darts.photo.outfit_net import HEADS, OutfitNet, probabilities_of
+
+    torch.manual_seed(seed)
+    generator = np.random.default_rng(seed)
+    train_rows, val_rows = np.flatnonzero(~arrays["val"]), np.flatnonzero(arrays["val"])
+    maps = torch.tensor(arrays["maps"].astype(np.float32))
+    thighs = torch.tensor(arrays["thighs"].astype(np.float32))
+    scalars = torch.tensor(arrays["scalars"])
+    truth = {name: torch.tensor(arrays[name]) for name in HEADS}
+    network = OutfitNet(width)
+    optimiser = torch.optim.AdamW(network.parameters(), 2e-3, weight_decay=1e-3)
+    schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, epochs)
+    validation = {k: v[val_rows] for k, v in arrays.items()}
+    best = (None, -1, -1.0)
+    for epoch in range(epochs):
+        network.train()
+        order = generator.permutation(train_rows)
+        for start in range(0, len(order), 32):
+            rows = torch.tensor(order[start:start + 32])
+            mirror = (torch.rand(len(rows)) < 0.5)[:, None, None, None]
+            batch, thigh_batch = maps[rows], thighs[rows]
+            out = network(torch.where(mirror, batch.flip(3), batch), torch.where(mirror, thigh_batch.flip(3), thigh_batch),
+                          scalars[rows])
+            loss = sum(torch.nn.functional.cross_entropy(out[name][truth[name][rows] >= 0],
+                                                         truth[name][rows][truth[name][rows] >= 0])
+                       for name in HEADS if (truth[name][rows] >= 0).any())
+            optimiser.zero_grad()
+            loss.backward()
+            optimiser.step()
+        schedule.step()
+        score = garment_score(probabilities_of(network, maps[val_rows].numpy(), thighs[val_rows].numpy(),
+                                               scalars[val_rows].numpy()), validation)
+        log(f"epoch {epoch + 1}: loss {loss.item():.3f}, validation garments right {score:.3f}")
+        if score >= best[2]:
+            best = (copy.deepcopy(network.state_dict()), epoch + 1, score)
+    network.load_state_dict(best[0])
+    return network.eval(), best[1], best[2]
+
+
+def evaluate(arrays: dict[str, np.ndarray], pictures: int) -> dict:
+    """The shipped network, the rules and the two combined (``darts.photo.attributes.combine`` with
+    ``RULE_WEIGHTS``; the picture's bounds on cloth running out of it not applied) on ``arrays``:
+    per decision the share right, and the share of ``pictures`` (those without a person count as
+    wrong) whose garment of the picture's kind (the first of each outfit) is right."""
+    from darts.photo.attributes import FLOOR, RULE_WEIGHTS
+    from darts.photo.outfit_net import HEADS, probabilities_of, shipped_network
+
+    network = probabilities_of(shipped_network(), arrays["maps"].astype(np.float32), arrays["thighs"].astype(np.float32),
+                               arrays["scalars"])
+    rules = {name: arrays[f"rules_{name}"] for name in HEADS}
+    combined = {}
+    for name in HEADS:
+        w = RULE_WEIGHTS[name]
+        logs = w * np.log(np.maximum(rules[name], FLOOR)) + (1 - w) * np.log(np.maximum(network[name], FLOOR))
+        combined[name] = np.exp(logs - logs.max(1, keepdims=True))
+    first_is_lower = np.array([TARGETS[o.split(",")[0]][0] == "lower" for o in arrays["outfits"]])
+    out = {}
+    for label, probabilities in (("network", network), ("rules", rules), ("combined", combined)):
+        right = outfit_right(probabilities, arrays)
+        kind_right = np.where(first_is_lower, right[:, 1], right[:, 0])
+        out[label] = {"picture_kind_right": round(float(kind_right.sum() / pictures), 4),
+                      "garments_right": round(garment_score(probabilities, arrays), 4),
+                      **{name: round(float((probabilities[name].argmax(1) == arrays[name])[arrays[name] >= 0].mean()), 4)
+                         for name in HEADS}}
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, required=True)
+    parser.add_argument("--epochs", type=int, default=40)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--width", type=int, default=16)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--rebuild-inputs", action="store_true")
+    parser.add_argument("--out", type=Path, default=Path("darts/photo/weights/outfit_net.pt"))
+    parser.add_argument("--evaluate", action="store_true",
+                        help="instead of training, measure the shipped network, the rules and both on every picture of --data")
+    args = parser.parse_args()
+    import torch
+
+    torch.set_num_threads(2)
+    cache = Path.home() / ".cache" / "darts" / "outfit_net" / args.data.name
+    fit_all(args.data, cache / "fits", args.workers)
+    inputs = cache / "inputs.npz"
+    if args.rebuild_inputs or not inputs.is_file():
+        started = time.process_time()
+        arrays = build_inputs(cache / "fits")
+        np.savez_compressed(inputs, **arrays)
+        print(f"inputs of {len(arrays['maps'])} pictures in {time.process_time() - started:.0f} s", flush=True)
+    arrays = dict(np.load(inputs))
+    if args.evaluate:
+        pictures = len(list((cache / "fits").glob("*.pkl")))
+        print(json.dumps({"data": str(args.data), "pictures": pictures, **evaluate(arrays, pictures)}, indent=1))
+        return
+    started = time.time()
+    network, epoch, score = train(arrays, args.epochs, args.seed, args.width)
+    record = {"command": " ".join(["python"] + sys.argv), "data": str(args.data), "seed": args.seed,
+              "epochs": args.epochs, "best_epoch": epoch, "validation_garments_right": round(score, 4),
+              "train_pictures": int((~arrays["val"]).sum()), "validation_pictures": int(arrays["val"].sum()),
+              "minutes": round((time.time() - started) / 60, 1)}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    torch.save({"state": network.state_dict(), "width": args.width, "record": record}, args.out)
+    print(json.dumps(record, indent=1))
+
+
+if __name__ == "__main__":
+    main()

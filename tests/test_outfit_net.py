@@ -1,0 +1,138 @@
+"""The network that decides a photograph's garments from the parsing (``darts.photo.outfit_net``) and
+its training script: inputs, mirror symmetry, targets, and a tiny network that learns."""
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from darts.body.segmentation import PART_INDEX
+from darts.photo import outfit_net
+from darts.photo.parsing import LOWER, SIZE, SKIN, UPPER
+
+_spec = importlib.util.spec_from_file_location("train_outfit_net", Path(__file__).parents[1] / "scripts" / "train_outfit_net.py")
+train_outfit_net = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(train_outfit_net)
+
+
+def test_maps_hold_each_blocks_share_of_each_label_and_body_zone():
+    labels = np.zeros((SIZE, SIZE), np.uint8)
+    labels[:64] = UPPER  # the top quarter
+    labels[64:96, :128] = LOWER  # an eighth, the left half of it
+    labels[96:100] = SKIN
+    body = np.full((SIZE, SIZE), -1)
+    body[:, :32] = PART_INDEX["left_thigh"]
+    body[:, 32:64] = PART_INDEX["right_thigh"]
+    inside = np.ones((SIZE, SIZE), bool)
+    inside[-16:] = False
+    points = np.zeros((33, 2))
+    points[[23, 24]] = [[100.0, 100.0], [140.0, 100.0]]  # the hips, the knees 60 pixels below
+    points[[25, 26]] = [[100.0, 160.0], [140.0, 160.0]]
+    maps, thighs = outfit_net.maps(labels, body, inside, points)
+    assert maps.shape == (outfit_net.CHANNELS, outfit_net.MAP_SIZE, outfit_net.MAP_SIZE)
+    assert thighs.shape == (outfit_net.CHANNELS, outfit_net.THIGH_SIZE, outfit_net.THIGH_SIZE)
+    means = maps.mean((1, 2))
+    assert means[0] == pytest.approx(0.25) and means[1] == pytest.approx(1 / 16) and means[2] == pytest.approx(4 / 256)
+    thigh = len(outfit_net.LABELS) + [k for k, zone in enumerate(outfit_net.ZONES) if "thigh" in zone][0]
+    assert means[thigh] == pytest.approx(0.25)  # both thighs, one zone
+    assert means[-1] == pytest.approx(16 / 256)  # outside the picture
+    # the thighs' map: a square of 2.4 x 60 pixels centred at (120, 130): rows 58..202, columns 48..192
+    span = outfit_net.THIGH_SPAN * 60
+    rows = 130 - span / 2 + (np.arange(outfit_net.THIGH_SIZE) + 0.5) * span / outfit_net.THIGH_SIZE
+    # the top quarter is upper cloth: pixel rows 0..63, whose centres lie under 64
+    np.testing.assert_allclose(thighs[0][rows <= 63.5], 1.0)
+    assert thighs[0][rows >= 64.5].max() == 0.0
+
+
+def test_scalars_follow_their_names_and_mark_what_was_not_measured():
+    top = {"sleeve_end": 0.3, "sleeve_beyond_picture": False, "top_hem_end": 0.5,
+           "arms": {"left": {"end": 0.35}, "right": {"end": 0.3}}}
+    lower = {"hem_end": 0.9, "hem_beyond_picture": True, "between_legs_fill": None, "off_the_legs": 0.1}
+    visibility = np.linspace(0, 1, 33)
+    values = dict(zip(outfit_net.SCALAR_NAMES, outfit_net.scalars(top, lower, None, {"lower_by_upper_nats": 20.0},
+                                                                   visibility)))
+    assert len(values) == outfit_net.SCALARS
+    assert values["top_sleeve_end"] == pytest.approx(0.3) and values["top_longer_arm_end"] == pytest.approx(0.35)
+    assert values["dress_sleeve_unread"] == 1.0 and values["dress_sleeve_end"] == -1.0
+    assert values["lower_hem_beyond_picture"] == 1.0 and values["lower_between_legs_fill"] == -1.0
+    assert values["lower_by_upper_nats"] == pytest.approx(np.log(21.0)) and values["upper_by_lower_nats"] == 0.0
+    assert values["knee_visibility"] == pytest.approx(min(visibility[25], visibility[26]))
+
+
+def test_a_picture_and_its_mirror_image_get_the_same_probabilities():
+    torch.manual_seed(0)
+    network = outfit_net.OutfitNet(8)
+    maps = np.random.default_rng(0).random((3, outfit_net.CHANNELS, outfit_net.MAP_SIZE, outfit_net.MAP_SIZE), np.float32)
+    thighs = np.random.default_rng(2).random((3, outfit_net.CHANNELS, outfit_net.THIGH_SIZE, outfit_net.THIGH_SIZE),
+                                             np.float32)
+    scalars = np.random.default_rng(1).random((3, outfit_net.SCALARS), np.float32)
+    straight = outfit_net.probabilities_of(network, maps, thighs, scalars)
+    mirrored = outfit_net.probabilities_of(network, maps[..., ::-1].copy(), thighs[..., ::-1].copy(), scalars)
+    for name, classes in outfit_net.HEADS.items():
+        assert straight[name].shape == (3, len(classes))
+        np.testing.assert_allclose(straight[name].sum(1), 1.0, rtol=1e-6)
+        np.testing.assert_allclose(straight[name], mirrored[name], rtol=1e-5)
+
+
+def test_targets_of_an_outfit():
+    assert train_outfit_net.targets(["short-skirt", "long-sleeve-top"]) == {"one_piece": 0, "sleeves": 2, "long": 0,
+                                                                              "skirt": 1}
+    assert train_outfit_net.targets(["sleeveless-dress"]) == {"one_piece": 1, "sleeves": 0, "long": -1, "skirt": -1}
+
+
+@pytest.mark.slow
+def test_a_tiny_network_learns_outfits_from_their_evidence():
+    """Ninety-six outfits whose scalars carry their classes (the maps blank): the training loop
+    fits them, every garment right, and keeps the best epoch."""
+    generator = np.random.default_rng(0)
+    count = 96
+    outfits = [["long-pants", "short-sleeve-top"], ["short-skirt", "sleeveless-top"], ["long-sleeve-dress"],
+               ["short-pants", "long-sleeve-top"]]
+    chosen = [outfits[k % 4] for k in range(count)]
+    heads = [train_outfit_net.targets(o) for o in chosen]
+    scalars = generator.normal(0, 0.1, (count, outfit_net.SCALARS)).astype(np.float32)
+    for row, head in enumerate(heads):
+        for column, name in enumerate(outfit_net.HEADS):
+            scalars[row, column] += 2.0 * head[name]
+    arrays = {"maps": np.zeros((count, outfit_net.CHANNELS, outfit_net.MAP_SIZE, outfit_net.MAP_SIZE), np.float16),
+              "thighs": np.zeros((count, outfit_net.CHANNELS, outfit_net.THIGH_SIZE, outfit_net.THIGH_SIZE), np.float16),
+              "scalars": scalars, "val": np.arange(count) % 3 == 0,
+              **{name: np.array([h[name] for h in heads]) for name in outfit_net.HEADS}}
+    logged = []
+    network, epoch, score = train_outfit_net.train(arrays, epochs=80, seed=0, width=4, log=logged.append)
+    assert len(logged) == 80 and 1 <= epoch <= 80
+    probabilities = outfit_net.probabilities_of(network, arrays["maps"].astype(np.float32),
+                                                arrays["thighs"].astype(np.float32), arrays["scalars"])
+    assert train_outfit_net.garment_score(probabilities, arrays) == 1.0 and score == 1.0
+
+
+def test_the_two_experts_combine_as_a_weighted_geometric_mean():
+    from darts.photo.attributes import combine
+
+    rules = {"skirt": {"pants": 0.9, "skirt": 0.1}}
+    network = {"skirt": {"pants": 0.2, "skirt": 0.8}}
+    assert combine(rules, network, {"skirt": 1.0})["skirt"]["pants"] == pytest.approx(0.9)
+    assert combine(rules, network, {"skirt": 0.0})["skirt"]["pants"] == pytest.approx(0.2)
+    half = combine(rules, network, {"skirt": 0.5})["skirt"]
+    assert half["pants"] == pytest.approx(np.sqrt(0.18) / (np.sqrt(0.18) + np.sqrt(0.08)))
+    assert sum(half.values()) == pytest.approx(1.0)
+
+
+def test_cloth_running_out_of_the_picture_is_at_least_as_long_as_seen():
+    from types import SimpleNamespace
+
+    from darts.photo.rules import within_picture_bounds
+
+    decided = {"one_piece": {"two": 0.9, "one": 0.1}, "sleeves": {"none": 0.1, "short": 0.8, "long": 0.1},
+               "long": {"short": 0.9, "long": 0.1}, "skirt": {"pants": 0.5, "skirt": 0.5}}
+    top = {"sleeve_end": 0.4, "sleeve_beyond_picture": True}
+    lower = {"hem_end": 0.4, "hem_beyond_picture": True}
+    bounded = within_picture_bounds(decided, SimpleNamespace(top=top, lower=lower, dress=None))
+    assert bounded["sleeves"]["long"] == 0.6 and bounded["sleeves"]["none"] == 0.0 and bounded["long"]["long"] == 0.6
+    assert bounded["skirt"] == decided["skirt"]
+    inside = within_picture_bounds(decided, SimpleNamespace(top={**top, "sleeve_beyond_picture": False},
+                                                            lower={**lower, "hem_beyond_picture": False}, dress=None))
+    assert inside == decided
