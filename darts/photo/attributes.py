@@ -28,11 +28,14 @@ two limbs the shorter end counts (``_garment_end``).
   down that lie off the fitted body's silhouette (``off_the_legs``).
 
 The cloth is measured both ways (``measure``): the parsing's upper and lower cloth as a top and a
-lower garment, and the two as one dress. ``darts.photo.outfit_net`` decides from the parsing and
-both measurements — one piece or two, the sleeves (none, short, long), the lower garment long or
-short, skirt or trousers — and the categories' probabilities follow: a top's or a dress's are the
-sleeves', a lower garment's P(long or short) x P(skirt or trousers). A one-colour cloth decided
-to be two garments (a suit) is split at the hips (``Parsing.split_one_piece``).
+lower garment, and the two as one dress. Four decisions — one piece or two, the sleeves (none,
+short, long), the lower garment long or short, skirt or trousers — are taken by two experts,
+the hand-set rules on the measurements (``darts.photo.rules``) and a small network over the
+parsing and both measurements (``darts.photo.outfit_net``), combined per decision by a weighted
+geometric mean (``combine``, ``RULE_WEIGHTS``), then bounded by what the picture shows
+(``rules.within_picture_bounds``). The categories' probabilities follow: a top's or a dress's are
+the sleeves', a lower garment's P(long or short) x P(skirt or trousers). A one-colour cloth
+decided to be two garments (a suit) is split at the hips (``Parsing.split_one_piece``).
 """
 from __future__ import annotations
 
@@ -364,9 +367,10 @@ def garments_seen(parsing: Parsing, landmarks: np.ndarray, visibility: np.ndarra
     notes on what could not be seen; the parsing as read: its upper and lower cloth one dress, or
     a one-colour cloth split at the hips into a top and a lower garment) of a parsed person whose
     BlazePose ``landmarks`` [33,2] are in picture pixels, with their ``visibility`` [33]. The
-    cloth is measured both ways (``measure``) and ``darts.photo.outfit_net`` decides from the
-    parsing and both measurements: one piece or two, the sleeves, the lower garment's length and
-    kind; each garment's attributes are its measurements, the sleeves decided and P(one piece)."""
+    cloth is measured both ways (``measure``) and the rules and the network decide together
+    (module docstring): one piece or two, the sleeves, the lower garment's length and kind; each
+    garment's attributes are its measurements, the sleeves decided, P(one piece), the network's
+    own answers and the colour test."""
     from darts.photo.outfit_net import decide
     from darts.photo.rules import rule_probabilities, within_picture_bounds
 
