@@ -16,14 +16,18 @@ Input, all side-agnostic (a picture and its mirror image are the same outfit):
   cloth, lower cloth, skin, face and hair, other; the fitted body's silhouette by zone (head and
   neck, upper torso, lower torso and hips, upper arms, forearms and hands, thighs, calves and
   feet); and the crop's part outside the picture;
+- ``thighs`` [``CHANNELS``, ``THIGH_SIZE``, ``THIGH_SIZE``]: the same channels sampled (bilinear)
+  over a square ``THIGH_SPAN`` x the hips-to-knees distance a side, centred between them (where
+  a skirt and shorts differ);
 - ``scalars`` [``SCALARS``]: the measurements of both readings — the cloth read as a top and a
   lower garment, and read as one dress — the colour test's two log-likelihood ratios
   (sign(x) log(1 + |x|)) and BlazePose's visibility of the elbows, wrists, knees, ankles, hips
   (the lesser of left and right) and the nose. A measurement not made is -1 with a flag.
 
-``OutfitNet``: four stride-2 3 x 3 convolutions (w, 2w, 4w, 4w channels, ReLU) over the maps,
-flattened, joined with the scalars, one hidden layer of 64 (ReLU, dropout), and a linear head per
-decision. Trained on posed renders (``scripts/train_outfit_net.py``, its record in the weights).
+``OutfitNet``: four stride-2 3 x 3 convolutions (w, 2w, 4w, 4w channels, ReLU) over each map
+(two towers), flattened, joined with the scalars, one hidden layer of 64 (ReLU, dropout), and a
+linear head per decision. Trained on posed renders (``scripts/train_outfit_net.py``, its record in
+the weights). ``darts.photo.attributes`` combines its answers with the hand-set rules'.
 """
 from __future__ import annotations
 
