@@ -206,17 +206,13 @@ def evaluate(arrays: dict[str, np.ndarray], pictures: int) -> dict:
     ``RULE_WEIGHTS``; the picture's bounds on cloth running out of it not applied) on ``arrays``:
     per decision the share right, and the share of ``pictures`` (those without a person count as
     wrong) whose garment of the picture's kind (the first of each outfit) is right."""
-    from darts.photo.attributes import FLOOR, RULE_WEIGHTS
+    from darts.photo.attributes import RULE_WEIGHTS, geometric_mix
     from darts.photo.outfit_net import HEADS, probabilities_of, shipped_network
 
     network = probabilities_of(shipped_network(), arrays["maps"].astype(np.float32), arrays["thighs"].astype(np.float32),
                                arrays["scalars"])
     rules = {name: arrays[f"rules_{name}"] for name in HEADS}
-    combined = {}
-    for name in HEADS:
-        w = RULE_WEIGHTS[name]
-        logs = w * np.log(np.maximum(rules[name], FLOOR)) + (1 - w) * np.log(np.maximum(network[name], FLOOR))
-        combined[name] = np.exp(logs - logs.max(1, keepdims=True))
+    combined = {name: geometric_mix(rules[name], network[name], RULE_WEIGHTS[name]) for name in HEADS}
     first_is_lower = np.array([TARGETS[o.split(",")[0]][0] == "lower" for o in arrays["outfits"]])
     out = {}
     for label, probabilities in (("network", network), ("rules", rules), ("combined", combined)):

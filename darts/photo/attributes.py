@@ -312,16 +312,20 @@ class Measured:
     """A parsed person's cloth measured both ways: as a ``top`` and a ``lower`` garment (the
     parsing's upper and lower labels) and as one ``dress`` (the two labels one: ``whole``); each
     evidence dict None when that garment is under ``MIN_GARMENT_SHARE``; ``points`` the
-    landmarks in crop pixels, ``knees`` whether both are seen."""
+    landmarks in crop pixels with their ``visibility``."""
 
     parsing: Parsing
     whole: Parsing
     points: np.ndarray
     visibility: np.ndarray
-    knees: bool
     top: dict | None
     lower: dict | None
     dress: dict | None
+
+    @property
+    def knees(self) -> bool:
+        """Whether both knees are seen (``_knees_seen``)."""
+        return _knees_seen(self.visibility)
 
     def network_inputs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(maps, thighs, scalars) of ``darts.photo.outfit_net`` for this person."""
@@ -342,22 +346,26 @@ def measure(parsing: Parsing, landmarks: np.ndarray, visibility: np.ndarray | No
     whole = parsing.merged()
     dress = _sleeves(whole, points, (DRESS,)) | _lower(whole, points, (DRESS,), knees) \
         if _share(whole, DRESS) >= MIN_GARMENT_SHARE else None
-    return Measured(parsing, whole, points, visibility, knees, top, lower, dress)
+    return Measured(parsing, whole, points, visibility, top, lower, dress)
+
+
+def geometric_mix(rules: np.ndarray, network: np.ndarray, weight: float) -> np.ndarray:
+    """[..., classes]: the rules' probabilities ``rules`` raised to ``weight`` times the network's
+    ``network`` raised to 1 - ``weight`` (a weighted geometric mean, each clipped at ``FLOOR``),
+    normalised over the last axis."""
+    logs = weight * np.log(np.maximum(rules, FLOOR)) + (1 - weight) * np.log(np.maximum(network, FLOOR))
+    mixed = np.exp(logs - logs.max(-1, keepdims=True))
+    return mixed / mixed.sum(-1, keepdims=True)
 
 
 def combine(rules: dict[str, dict[str, float]], network: dict[str, dict[str, float]], weights: dict[str, float]
             ) -> dict[str, dict[str, float]]:
-    """Per decision, the two experts' probabilities multiplied, the rules' raised to its weight w in
-    ``weights`` and the network's to 1 - w (a weighted geometric mean, each clipped at ``FLOOR``),
-    and normalised."""
+    """Per decision, the two experts' probabilities by class mixed by ``geometric_mix`` with that
+    decision's weight in ``weights``."""
     out = {}
     for name, classes in network.items():
-        weight = weights[name]
-        logs = {c: weight * np.log(max(rules[name][c], FLOOR)) + (1 - weight) * np.log(max(p, FLOOR))
-                for c, p in classes.items()}
-        top = max(logs.values())
-        total = sum(np.exp(v - top) for v in logs.values())
-        out[name] = {c: float(np.exp(v - top) / total) for c, v in logs.items()}
+        mixed = geometric_mix(np.array([rules[name][c] for c in classes]), np.array(list(classes.values())), weights[name])
+        out[name] = {c: float(p) for c, p in zip(classes, mixed)}
     return out
 
 
