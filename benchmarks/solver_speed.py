@@ -199,7 +199,7 @@ def main() -> None:
         garment, motion = scene.split(":")
         dart = load_dart(resolve_garment(garment))
         model = cloth_model(dart)
-        track = build_body_track(body, load_motion(resolve_motion(motion)), 30.0, 0.5)
+        track = build_body_track(body, load_motion(resolve_motion(motion)), 30.0, 0.5, gap=SimSettings().body_gap)
         frames = args.frames or (30 if index == 0 else len(track.vertices))
         results = compare(dart, model, track, {name: CONFIGURATIONS[name] for name in args.configurations}, frames,
                           args.profile, args.perturbed)

@@ -466,7 +466,9 @@ def shipped_motions() -> list[str]:
         lowest = vertices[..., 2].min(axis=1)
         angle = np.degrees(np.linalg.norm(motion.parts()["body_pose"][:, 1:], axis=2)).max()
         travel = float(np.linalg.norm(motion.trans[-1, :2] - motion.trans[0, :2]))
-        low, high = (f"{v:+.3f}".replace("-", "−") for v in (lowest.min(), lowest.max()))
+        # rounded first, then + 0.0: a value within rounding of zero prints +0.000 whatever its sign
+        # (the last bits of the posed body's lowest point differ between CPUs)
+        low, high = (f"{round(float(v), 3) + 0.0:+.3f}".replace("-", "−") for v in (lowest.min(), lowest.max()))
         rows.append(f"| {name} | {motion.num_frames} | {motion.fps:g} | {motion.duration:.1f} | {travel:.2f} | {low} / {high} | "
                     f"{angle:.0f} |")
     return rows

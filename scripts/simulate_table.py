@@ -40,7 +40,8 @@ def run_one(job: tuple[str, str, str]) -> dict:
     dart = load_dart(GARMENTS_DIR / f"{garment}.npz")
     dart.set_seam("all", regime)
     settings = SimSettings()
-    track = build_body_track(load_body(), load_motion(MOTIONS_DIR / f"{motion}.npz"), settings.fps, 0.5)
+    track = build_body_track(load_body(), load_motion(MOTIONS_DIR / f"{motion}.npz"), settings.fps, 0.5,
+                             gap=settings.body_gap)
     if regime != "stiff":
         keep = track.settle_frames + int(REGIME_SECONDS * settings.fps)
         track.vertices = track.vertices[:keep]

@@ -404,7 +404,8 @@ def _prepare(job: SimJob, keep_frames: bool, progress: bool) -> _Prepared:
         from sim.outfit import outfit_model
 
         garments = outfit_model(dressing.darts, dressing.names, body.shaped(own)[0][0].double().numpy(), body.faces)
-    track = build_body_track(body, motion, settings.fps, job.settle, betas=target, start_betas=own, progress=progress)
+    track = build_body_track(body, motion, settings.fps, job.settle, betas=target, start_betas=own, progress=progress,
+                             gap=settings.body_gap)
     frames = _Frames(job, track, keep_frames)
     frames.parts = list(zip(dressing.names, dressing.slices))
     return _Prepared(job, settings, dressing, garments, track, frames)

@@ -63,8 +63,10 @@ def _shape_blend(start: np.ndarray, target: np.ndarray, count: int, frames: int)
 
 
 def build_body_track(body: BodyModel, motion: Motion, fps: float, settle: float, betas=None,
-                     progress: bool = False, start_betas=None) -> BodyTrack:
-    """Pose ``body`` by ``motion`` resampled to ``fps``, preceded by ``settle`` seconds of blend.
+                     progress: bool = False, start_betas=None, gap: float = 0.0) -> BodyTrack:
+    """Pose ``body`` by ``motion`` resampled to ``fps``, preceded by ``settle`` seconds of blend;
+    with ``gap`` > 0 (m), every frame's parts that overlap or come closer are pressed that far apart
+    (``sim.body_separation``; ``SimSettings.body_gap``).
 
     ``start_betas``: the shape the body starts in (a garment's own shape) when it is not ``betas``
     (the shape to simulate on); the body then also changes shape during the settle blend, so a
@@ -94,5 +96,9 @@ def build_body_track(body: BodyModel, motion: Motion, fps: float, settle: float,
     origin = rest_joints[0, 0].double().numpy()
     # In the rest pose every joint moves with the root: x -> R (x - J_0) + J_0 + trans.
     rotation = axis_angle_to_matrix(torch.as_tensor(motion.body_pose[0, 0], dtype=torch.float64)).numpy()
-    return BodyTrack(vertices, body.faces, float(fps), count, rotation, origin, origin + motion.trans[0],
-                     body_segmentation(body))
+    parts = body_segmentation(body)
+    if gap > 0:
+        from sim.body_separation import separate_parts
+
+        vertices = separate_parts(vertices, body.faces, parts, gap)
+    return BodyTrack(vertices, body.faces, float(fps), count, rotation, origin, origin + motion.trans[0], parts)

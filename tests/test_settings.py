@@ -18,7 +18,7 @@ SETTINGS = user_settings()
 def _other_value(setting):
     """A value of ``setting`` that is not its default, as the API takes it."""
     return {"bool": lambda: not setting.default, "vector": lambda: (1.5, -2.0, 0.25),
-            "int": lambda: (setting.default or 7) + 3, "float": lambda: setting.default + 0.5,
+            "int": lambda: (setting.default or 7) + 3, "float": lambda: setting.default / 2 if setting.default else 0.5,
             "str": lambda: {"solver": "mass-spring", "device": "cuda:1"}[setting.name]}[setting.kind]()
 
 

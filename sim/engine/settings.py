@@ -84,6 +84,10 @@ class SimSettings:
         True, "keep cloth off body faces buried inside another body part too (where the posed body overlaps "
               "itself: calves in thighs in a squat), pushing it from one buried face to another",
         flag="--no-overlap-release", key="overlap_release")
+    body_gap: float = _user(
+        0.01, "m kept between body parts where the posed body overlaps itself or comes closer (thighs and belly "
+               "in a squat, arms and chest): their surfaces are pressed flat against each other before simulating "
+               "(sim.body_separation); 0: the body as skinned")
     tethers: bool = _user(
         True, "xpbd: without the long-range tethers (sim.engine.tethers) that hold the garment's length over many edges at "
               "once (it then stretches and waistbands slide unless many more substeps are taken)")
@@ -127,6 +131,7 @@ class SimSettings:
             (self.air_density >= 0 and self.drag_coefficient >= 0, "air density and drag must be >= 0"),
             (self.damping >= 0, f"damping must be >= 0, got {self.damping}"),
             (self.waist_friction >= 0, f"waist friction must be >= 0, got {self.waist_friction}"),
+            (0 <= self.body_gap <= 0.05, f"body gap must be in [0, 0.05] m, got {self.body_gap}"),
             (self.contact_reach > 0 and self.self_contact_reach > 0 and self.max_speed > 0,
              "contact reaches and max speed must be > 0"),
             (0 <= self.contact_skin <= CCD_MIN_PATH, f"contact skin must be in [0, {CCD_MIN_PATH}] m, got {self.contact_skin}"),

@@ -1,0 +1,171 @@
+"""The posed body's parts pressed against each other instead of through each other (issue 46).
+
+Linear blend skinning lets a posed body overlap itself: in a squat the calves sink into the thighs
+and the thighs into the belly, crossed arms into the chest. Cloth caught there lies inside one part
+whatever the solver does, since no place outside the body exists between the two surfaces. Soft
+tissue does not pass through itself; it flattens where two parts press together. This module does
+that to each frame of a body track (world frame, Z up, metres), before the cloth sees it:
+
+For a body vertex v with unit normal n: where the ray from v along -n leaves a volume (meets a face
+from behind) within ``DEPTH_REACH``, after t, and the ray along n also meets a face from behind, v
+lies inside another part (``sim.engine.kernels.buried``'s test) about t deep, and moves by
+
+    d(v) = -n min((min(t, DEPTH_CAP) + g) / 2, STEP)
+
+so that the two surfaces, each moving half the depth plus half the gap g, meet g apart. A vertex
+whose ray along n meets a face from the front at s < g (another part closer than the gap) moves by
+-n (g - s) / 2. The moves are averaged twice with each vertex's one-ring (d <- (d + mean of the
+ring's d) / 2: the flesh around a pressed spot gives too); a move that would turn a face over
+against the skinned body's is halved, up to ``UNFOLD_HALVINGS`` times, then held; the vertices
+move, and the normals and rays are taken again for the moved vertices and their rings, up to
+``ITERATIONS`` rounds or until no move reaches ``TOLERANCE``. Only the parts a garment covers move
+(torso, hips, arms, thighs, calves): the head, neck, hands and feet keep their shape (the bundled
+body's own mesh overlaps itself a little at the toes and fingers, which is no cloth's business),
+while a part pressed against them still gives way.
+
+The moves depend on the pose alone (no state is carried from frame to frame), so they follow it;
+frames without any overlap or near contact are left exactly as skinned.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from darts.body.segmentation import PART_INDEX
+from darts.geometry.warp_runtime import warp
+
+wp = warp()
+
+#: the parts whose surface may move: those a garment can cover
+MOVABLE_PARTS = ("upper_torso", "lower_torso", "hips", "left_upper_arm", "right_upper_arm", "left_forearm",
+                 "right_forearm", "left_thigh", "right_thigh", "left_calf", "right_calf")
+ITERATIONS = 8  # rounds of rays and moves per frame, at most
+SMOOTHING = 2  # one-ring averages of the moves per round
+DEPTH_CAP = 0.04  # m: an overlap deeper than this along the normal is taken as this deep (a ray grazing a fold)
+DEPTH_REACH = 0.08  # m a ray along -n looks for where v leaves another part (deeper: only the ring's moves reach it)
+STEP = 0.01  # m a vertex moves at most per round
+UNFOLD_HALVINGS = 6  # times a move that would turn a face over is halved
+TOLERANCE = 1.0e-4  # m: a round whose largest move is under this is the last
+REACH = 0.25  # m a ray looks for another part (more than the deepest overlap of two posed parts)
+
+
+@wp.kernel
+def _face_normals_to_vertices(points: wp.array(dtype=wp.vec3), faces: wp.array(dtype=wp.int32),
+                              normal: wp.array(dtype=wp.vec3)):
+    """normal[v] += each face's area-weighted normal, for the face's three corners."""
+    f = wp.tid()
+    a, b, c = faces[3 * f], faces[3 * f + 1], faces[3 * f + 2]
+    n = wp.cross(points[b] - points[a], points[c] - points[a])
+    wp.atomic_add(normal, a, n)
+    wp.atomic_add(normal, b, n)
+    wp.atomic_add(normal, c, n)
+
+
+@wp.kernel
+def _separating_moves(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
+                      active: wp.array(dtype=wp.int32), gap: float, move: wp.array(dtype=wp.vec3)):
+    """move[v] for each ``active`` vertex v: -n min((t + gap) / 2, STEP) inside another part (t: how far
+    along -n it leaves that part, at most DEPTH_CAP), -n (gap - s) / 2 where its ray along n meets
+    another surface from the front at s < gap, else 0 (``move`` zero beforehand)."""
+    i = active[wp.tid()]
+    p = points[i]
+    n = wp.normalize(normal[i])
+    amount = float(0.0)
+    # Leaving a volume along -n within DEPTH_REACH: v may lie inside another part, which the (long)
+    # ray along n then meets from behind; otherwise only a surface within the gap along n matters.
+    inward = wp.mesh_query_ray(mesh, p - 1.0e-4 * n, -n, DEPTH_REACH)
+    reach = gap
+    if inward.result and inward.sign < 0.0:
+        reach = REACH
+    out = wp.mesh_query_ray(mesh, p + 1.0e-4 * n, n, reach)
+    if out.result and out.sign < 0.0:
+        amount = wp.min(0.5 * (wp.min(inward.t, DEPTH_CAP) + gap), STEP)
+    elif out.result and out.t < gap:
+        amount = 0.5 * (gap - out.t)
+    move[i] = -amount * n
+
+
+def ring_average(faces: np.ndarray, count: int) -> sp.csr_matrix:
+    """[count, count] sparse: row v averages v's one-ring neighbours (the vertices sharing an edge)."""
+    f = np.asarray(faces, np.int64).reshape(-1, 3)
+    rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2], f[:, 1], f[:, 2], f[:, 0]])
+    cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0], f[:, 0], f[:, 1], f[:, 2]])
+    adjacency = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(count, count))
+    adjacency.data[:] = 1.0  # each edge once, whichever faces share it
+    degree = np.maximum(np.asarray(adjacency.sum(1)).ravel(), 1.0)
+    return sp.diags(1.0 / degree) @ adjacency
+
+
+class BodySeparation:
+    """Separates the overlapping parts of one body mesh (``faces`` [F,3]; ``parts`` [V]: each
+    vertex's part index in ``darts.body.segmentation.PART_NAMES``) frame by frame, ``gap`` (m) apart."""
+
+    def __init__(self, faces: np.ndarray, parts: np.ndarray, gap: float):
+        self.faces = np.asarray(faces, np.int32).reshape(-1, 3)
+        self.count = len(parts)
+        self.gap = float(gap)
+        self.ring = ring_average(self.faces, self.count)
+        self.movable = np.isin(np.asarray(parts), [PART_INDEX[name] for name in MOVABLE_PARTS])
+        self.neighbours = (self.ring > 0).astype(np.float64)
+        self.points = wp.zeros(self.count, dtype=wp.vec3, device="cpu")
+        self.indices = wp.array(self.faces.reshape(-1), dtype=wp.int32, device="cpu")
+        self.mesh = None  # built on the first frame's points (a tree built on zeros would be refit into a poor one)
+        self.normal = wp.zeros_like(self.points)
+        self.move = wp.zeros_like(self.points)
+
+    def __call__(self, vertices: np.ndarray) -> np.ndarray:
+        """``vertices`` [V,3] of one frame with its parts moved apart (a new array; the same values
+        where nothing overlaps or comes within the gap)."""
+        points = np.array(vertices, np.float64)
+        posed = np.asarray(vertices, np.float64)
+        active = np.flatnonzero(self.movable)
+        for _ in range(ITERATIONS):
+            self.points.assign(points.astype(np.float32))
+            if self.mesh is None:
+                self.mesh = wp.Mesh(points=self.points, indices=self.indices)
+            self.mesh.refit()
+            self.normal.zero_()
+            self.move.zero_()
+            wp.launch(_face_normals_to_vertices, len(self.faces), [self.points, self.indices, self.normal], device="cpu")
+            wp.launch(_separating_moves, len(active), [self.mesh.id, self.points, self.normal,
+                                                       wp.array(active.astype(np.int32), dtype=wp.int32, device="cpu"),
+                                                       self.gap, self.move], device="cpu")
+            move = self.move.numpy().astype(np.float64)
+            if np.abs(move).max(initial=0.0) < TOLERANCE:
+                break
+            for _ in range(SMOOTHING):
+                move = 0.5 * (move + self.ring @ move)
+            points += self._unfolding(posed, points, move)
+            moved = np.abs(move).max(1) > 0
+            active = np.flatnonzero(self.movable & (moved | (self.neighbours @ moved > 0)))
+        return points
+
+
+    def _unfolding(self, posed: np.ndarray, points: np.ndarray, move: np.ndarray) -> np.ndarray:
+        """``move`` [V,3] of ``points`` with the moves of a face's corners halved, up to
+        ``UNFOLD_HALVINGS`` times, while the face would end turned over against the ``posed`` one
+        (its normal at more than 90 degrees to the skinned body's), then stopped."""
+        touched = np.flatnonzero(np.abs(move).max(1)[self.faces].any(1))
+        faces = self.faces[touched]
+
+        def normals(v):
+            return np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])
+
+        before = normals(posed)
+        for _ in range(UNFOLD_HALVINGS):
+            turned = (normals(points + move) * before).sum(1) <= 0.0
+            if not turned.any():
+                return move
+            move[np.unique(faces[turned])] *= 0.5
+        while (turned := (normals(points + move) * before).sum(1) <= 0.0).any():
+            move[np.unique(faces[turned])] = 0.0  # kept still: a face whose corners all stay cannot turn
+        return move
+
+
+def separate_parts(vertices: np.ndarray, faces: np.ndarray, parts: np.ndarray, gap: float) -> np.ndarray:
+    """A body track's vertices [T,V,3] with every frame's overlapping parts pressed ``gap`` (m) apart
+    (``BodySeparation``); ``gap`` 0 returns them as they are."""
+    if gap <= 0:
+        return vertices
+    separation = BodySeparation(faces, parts, gap)
+    return np.stack([separation(frame) for frame in vertices]).astype(np.asarray(vertices).dtype)
