@@ -72,7 +72,7 @@ def main() -> None:
     args = parser.parse_args()
     garment, motion = args.scene.split(":")
     model = cloth_model(load_dart(resolve_garment(garment)))
-    track = build_body_track(load_body(), load_motion(resolve_motion(motion)), 30.0, 0.5)
+    track = build_body_track(load_body(), load_motion(resolve_motion(motion)), 30.0, 0.5, gap=SimSettings().body_gap)
     first = track.settle_frames + 1
     frames = min(args.frames, len(track.vertices) - first)
 

@@ -58,7 +58,7 @@ def run_one(job: tuple[str, str, str]) -> dict:
            "max_self_intersections": max((f["self_intersections"] for f in frames), default=0),
            **{key: stats[key] for key in ("max_penetration_winding", "max_penetration_winding_outside_body_overlap",
                                           "strain_mean", "strain_p99", "strain_max",
-                                          "max_waist_slide")},
+                                          "max_waist_slide", "max_substep_speed", "max_frame_speed")},
            "max_gap": max((g["sprung_max" if regime == "partial" else "max"] for g in gaps), default=0.0),
            "mean_gap": float(np.mean([g["mean"] for g in gaps])) if gaps else 0.0,
            "open_mean": float(np.mean([g["open_mean"] for g in gaps])) if regime == "partial" and gaps else None,
