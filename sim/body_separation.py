@@ -15,7 +15,8 @@ lies inside another part (``sim.engine.kernels.buried``'s test) about t deep, an
 so that the two surfaces, each moving half the depth plus half the gap g, meet g apart. A vertex
 whose ray along n meets a face from the front at s < g (another part closer than the gap) moves by
 -n (g - s) / 2. The moves are averaged twice with each vertex's one-ring (d <- (d + mean of the
-ring's d) / 2: the flesh around a pressed spot gives too); a move that would turn a face over
+ring's d) / 2: the flesh around a pressed spot gives too; none of it into a part that keeps its
+shape); a move that would turn a face over
 against the skinned body's is halved, up to ``UNFOLD_HALVINGS`` times, then held; the vertices
 move, and the normals and rays are taken again for the moved vertices and their rings, up to
 ``ITERATIONS`` rounds or until no move reaches ``TOLERANCE``. Only the parts a garment covers move
@@ -135,11 +136,11 @@ class BodySeparation:
                 break
             for _ in range(SMOOTHING):
                 move = 0.5 * (move + self.ring @ move)
+            move[~self.movable] = 0.0  # the average reaches a ring into the parts that keep their shape
             points += self._unfolding(posed, points, move)
             moved = np.abs(move).max(1) > 0
             active = np.flatnonzero(self.movable & (moved | (self.neighbours @ moved > 0)))
         return points
-
 
     def _unfolding(self, posed: np.ndarray, points: np.ndarray, move: np.ndarray) -> np.ndarray:
         """``move`` [V,3] of ``points`` with the moves of a face's corners halved, up to

@@ -85,6 +85,15 @@ def test_only_the_parts_a_garment_covers_move():
     separated = BodySeparation(faces, parts, 0.01)(vertices)
     assert np.array_equal(separated[first:], vertices[first:])
     assert len(inside_another_part(separated, faces, np.arange(first))) == 0
+    # a part that may move, next to one that may not (a forearm at the wrist): the moves averaged
+    # over the rings stop at the border
+    vertices, faces, parts, first = two_spheres(overlap=0.02)
+    hand = np.flatnonzero(vertices[:, 0] > 0.095)
+    hand = hand[hand >= first]  # the second sphere's side just past where the first presses it (x < 0.1)
+    parts[hand] = PART_INDEX["left_hand"]
+    separated = BodySeparation(faces, parts, 0.01)(vertices)
+    moved = np.linalg.norm(separated - vertices, axis=1)
+    assert (moved[hand] == 0).all() and moved[first:].max() > 0.005
 
 
 @pytest.fixture(scope="module")
