@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
+from scipy.ndimage import distance_transform_edt
 
 from darts.camera import Camera
 from darts.dart.io import load_dart
@@ -77,11 +78,15 @@ def test_sample_lines_land_on_the_garment_mask_boundary(made, body):
             shaped = body.shaped(np.asarray(meta["betas"]))[0][0].double().numpy()
             behind_body = hidden_by(points, camera.centre, (shaped, body.faces), (draped["vertices"], draped["faces"])) == 0
             # On the mask's edge; where a loop runs behind the garment it falls inside the mask, and
-            # where it runs behind the body (the back of a neckline, an armhole) the body is seen there.
+            # where it runs behind the body (the back of a neckline, an armhole) the body is seen
+            # there, within 2 px of the body's mask (as the line is within 2 px of the garment's: a
+            # point on the body's silhouette falls on either side of it as the drape's last bits vary,
+            # e.g. with torch's thread count: 27 and 28 of one sample's 31 points on the mask itself)
             assert np.median(to_boundary) <= 2.0, (folder, np.median(to_boundary))
             assert to_mask[~behind_body].max() <= 4.0, (folder, to_mask[~behind_body].max())
             col, row_ = np.floor(pixels[behind_body]).astype(int).T
-            assert body_mask[row_, col].mean() >= 0.9
+            off_body = distance_transform_edt(~body_mask)
+            assert (off_body[row_, col] <= 2.0).mean() >= 0.9
             assert row["line_boundary_median_px"] == pytest.approx(float(np.median(to_boundary)))
 
 
