@@ -33,6 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from darts.body.segmentation import PART_INDEX
+from darts.geometry.mesh import unique_edges
 from darts.geometry.warp_runtime import warp
 
 wp = warp()
@@ -88,11 +89,9 @@ def _separating_moves(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), normal: 
 
 def ring_average(faces: np.ndarray, count: int) -> sp.csr_matrix:
     """[count, count] sparse: row v averages v's one-ring neighbours (the vertices sharing an edge)."""
-    f = np.asarray(faces, np.int64).reshape(-1, 3)
-    rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2], f[:, 1], f[:, 2], f[:, 0]])
-    cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0], f[:, 0], f[:, 1], f[:, 2]])
+    edges = unique_edges(np.asarray(faces, np.int64).reshape(-1, 3))
+    rows, cols = np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]]
     adjacency = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(count, count))
-    adjacency.data[:] = 1.0  # each edge once, whichever faces share it
     degree = np.maximum(np.asarray(adjacency.sum(1)).ravel(), 1.0)
     return sp.diags(1.0 / degree) @ adjacency
 
