@@ -121,6 +121,12 @@ def outfits() -> list[str]:
     return _script("simulate_outfits").table(json.loads((DATA / "outfits.json").read_text())).splitlines()
 
 
+def strain_waist() -> list[str]:
+    """The long pants' strain against the waistband's hold (``docs/data/strain_waist_sweep.json``,
+    written by ``python scripts/strain_waist_sweep.py``)."""
+    return _script("strain_waist_sweep").table(json.loads((DATA / "strain_waist_sweep.json").read_text())).splitlines()
+
+
 def crdl_comparison() -> list[str]:
     """The CRDL against handle-based Laplacian deformation and libigl's ARAP
     (``docs/data/crdl_comparison.json``, written by ``python scripts/compare_deformations.py``)."""
@@ -523,6 +529,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "simulation-results": ("docs/simulation.md", simulation_results),
     "seam-regimes": ("docs/simulation.md", seam_regimes),
     "outfits": ("docs/simulation.md", outfits),
+    "strain-waist": ("docs/simulation.md", strain_waist),
     "crdl-comparison": ("docs/crdl.md", crdl_comparison),
     "classifier": ("docs/reconstruction.md", reconstruction(0)),
     "lines-test": ("docs/reconstruction.md", reconstruction(1)),
