@@ -20,6 +20,7 @@ from darts.motion.amass import Motion
 from darts.motion.budget import check_frames
 from darts.motion.posing import motion_betas, pose_sequence
 from darts.motion.resampling import resample
+from sim.engine.settings import DEFAULT_BODY_GAP
 
 
 @dataclass
@@ -63,10 +64,11 @@ def _shape_blend(start: np.ndarray, target: np.ndarray, count: int, frames: int)
 
 
 def build_body_track(body: BodyModel, motion: Motion, fps: float, settle: float, betas=None,
-                     progress: bool = False, start_betas=None, gap: float = 0.0) -> BodyTrack:
+                     progress: bool = False, start_betas=None, gap: float = DEFAULT_BODY_GAP) -> BodyTrack:
     """Pose ``body`` by ``motion`` resampled to ``fps``, preceded by ``settle`` seconds of blend;
-    with ``gap`` > 0 (m), every frame's parts that overlap or come closer are pressed that far apart
-    (``sim.body_separation``; ``SimSettings.body_gap``).
+    with ``gap`` > 0 (m; by default ``SimSettings``' own, so a track built without naming it is the
+    one darts-sim simulates against), every frame's parts that overlap or come closer are pressed
+    that far apart (``sim.body_separation``; ``SimSettings.body_gap``); 0: the body as skinned.
 
     ``start_betas``: the shape the body starts in (a garment's own shape) when it is not ``betas``
     (the shape to simulate on); the body then also changes shape during the settle blend, so a

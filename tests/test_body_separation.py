@@ -99,7 +99,7 @@ def test_only_the_parts_a_garment_covers_move():
 @pytest.fixture(scope="module")
 def squat_tracks(body):
     motion = load_motion(MOTIONS_DIR / "squat.npz")
-    posed = build_body_track(body, motion, 30.0, 0.5)
+    posed = build_body_track(body, motion, 30.0, 0.5, gap=0.0)
     separated = build_body_track(body, motion, 30.0, 0.5, gap=SimSettings().body_gap)
     return posed, separated
 
@@ -134,3 +134,35 @@ def test_the_separated_body_moves_as_smoothly_as_the_skinned_one(squat_tracks):
         return np.linalg.norm(np.diff(v, 2, axis=0), axis=2).max() * posed.fps ** 2
 
     assert acceleration(separated.vertices) <= 2.5 * acceleration(posed.vertices)
+
+
+def test_a_body_track_built_without_a_gap_named_is_the_one_darts_sim_simulates_against(body, squat_tracks):
+    """``build_body_track``'s default gap is ``SimSettings``' own: a track made by a caller that names
+    no gap (the posed dataset did, and got the skinned body) is pressed apart like darts-sim's."""
+    posed, separated = squat_tracks
+    default = build_body_track(body, load_motion(MOTIONS_DIR / "squat.npz"), 30.0, 0.5)
+    assert np.array_equal(default.vertices, separated.vertices)
+    assert np.abs(default.vertices - posed.vertices).max() > 0.005
+
+
+def test_the_posed_dataset_poses_its_garments_on_the_body_darts_sim_uses(monkeypatch):
+    """The posed dataset's garments are simulated on the body pressed apart by its own settings'
+    gap (``SimSettings.body_gap``), not on the skinned body."""
+    import sim.body_track
+    from sim.dataset.cli import garment_jobs
+    from sim.dataset.posed import make_posed_garment
+
+    class Built(Exception):
+        pass
+
+    gaps = []
+
+    def recording(*args, gap=None, **kwargs):
+        gaps.append(gap)
+        raise Built
+
+    monkeypatch.setattr(sim.body_track, "build_body_track", recording)
+    job = garment_jobs(1, 1, 0, ["short-pants"])[0]
+    with pytest.raises(Built):
+        make_posed_garment(job, None)
+    assert gaps == [SimSettings().body_gap] and gaps[0] > 0

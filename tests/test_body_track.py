@@ -20,7 +20,7 @@ GARMENTS = Path(__file__).parents[1] / "scenes" / "garments"
 @pytest.fixture(scope="module")
 def run_track(body):
     motion = load_motion(MOTIONS_DIR / "run.npz")
-    return motion, build_body_track(body, motion, fps=30.0, settle=0.5)
+    return motion, build_body_track(body, motion, fps=30.0, settle=0.5, gap=0.0)  # the body as skinned
 
 
 def test_track_starts_at_rest_and_reaches_the_first_frame(body, run_track):

@@ -108,11 +108,12 @@ def make_posed_garments(jobs: list[Job], folders: list[Path], device: str = "cpu
         motion = load_motion(resolve_motion(posed["motion"]))
         frames = posed["frame"] + 1
         motion = motion.with_frames(trans=motion.trans[:frames], **{k: v[:frames] for k, v in motion.parts().items()})
-        track = build_body_track(body, motion, 30.0, DRAPE_SECONDS, betas=np.asarray(recipe.betas))
+        settings = SimSettings(solver=DRAPE_SOLVER[family], device=device)
+        track = build_body_track(body, motion, settings.fps, DRAPE_SECONDS, betas=np.asarray(recipe.betas),
+                                 gap=settings.body_gap)
         last = {}
         made.append((recipe, posed, dart, track, last, built))
-        worlds.append(World(dart, track, lambda g, b, last=last: last.update(garment=g, body=b),
-                            SimSettings(solver=DRAPE_SOLVER[family], device=device)))
+        worlds.append(World(dart, track, lambda g, b, last=last: last.update(garment=g, body=b), settings))
     started = time.perf_counter()
     results = simulate_grouped(worlds)
     simulated = time.perf_counter() - started

@@ -14,6 +14,9 @@ from darts import arguments
 from darts.errors import DartsInputError
 
 DEFAULT_SOLVER = "xpbd"
+#: m kept between the posed body's parts where they overlap or come closer (``SimSettings.body_gap``,
+#: and ``sim.body_track.build_body_track``'s default: every body track is the one darts-sim simulates against)
+DEFAULT_BODY_GAP = 0.01
 #: A particle's path relative to the body longer than this (m) since its last search is traced for
 #: a crossing: half the thickness of the thinnest body part (a finger, about 2 cm), so a shorter path
 #: cannot have reached past a part's middle and the closest body point is the right way out. It also
@@ -85,7 +88,7 @@ class SimSettings:
               "itself: calves in thighs in a squat), pushing it from one buried face to another",
         flag="--no-overlap-release", key="overlap_release")
     body_gap: float = _user(
-        0.01, "m kept between body parts where the posed body overlaps itself or comes closer (thighs and belly "
+        DEFAULT_BODY_GAP, "m kept between body parts where the posed body overlaps itself or comes closer (thighs and belly "
                "in a squat, arms and chest): their surfaces are pressed flat against each other before simulating "
                "(sim.body_separation); 0: the body as skinned")
     tethers: bool = _user(
