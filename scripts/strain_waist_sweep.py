@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from darts.fileio import atomic_path
+
 ROOT = Path(__file__).resolve().parents[1]
 GARMENT = "long-pants"
 MOTIONS = ("sit", "squat")
@@ -70,9 +72,9 @@ def garment(ease: float | None):
                               "cotton")
 
 
-def run(motion: str, waist: float, friction: float | None, ease: float | None, over: str | None
-        ) -> tuple[dict, dict]:
-    """(the row's measures, what the worst frame needs: particles, body, frame index) of one
+def run(motion: str, waist: float, friction: float | None, ease: float | None, over: str | None,
+        keep: bool = False) -> tuple[dict, dict | None]:
+    """(the row's measures, with ``keep`` what ``where`` needs of the worst frame, else None) of one
     configuration; with ``over``, the pants and that shipped garment as an outfit (``sim.outfit``)."""
     from darts.body.io import load_body
     from darts.dart.io import load_dart
@@ -91,8 +93,9 @@ def run(motion: str, waist: float, friction: float | None, ease: float | None, o
                                                       body.shaped()[0][0].double().numpy(), body.faces)
     settings = SimSettings(waist_friction=waist)
     track = build_body_track(body, load_motion(resolve_motion(motion)), settings.fps, 0.5, gap=settings.body_gap)
-    kept = []
-    result = simulate(garments, track, settings, sink=lambda garment, body: kept.append((garment.copy(), body.copy())))
+    kept = []  # every recorded frame's garment and body, only for the run ``where`` takes apart
+    result = simulate(garments, track, settings,
+                      sink=(lambda garment, body: kept.append((garment.copy(), body.copy()))) if keep else None)
     stats = summary(result, len(dart.vertices) if over is None else len(garments.model.rest))
     p99 = [f["strain"]["p99"] for f in result.frames]
     worst = int(np.argmax(p99))
@@ -104,6 +107,8 @@ def run(motion: str, waist: float, friction: float | None, ease: float | None, o
            "crossings_per_frame": [f["self_intersections"] for f in result.frames],
            "strain_p99_per_garment": None if over is None else {
                name: max(f["garments"][name]["strain"]["p99"] for f in result.frames) for name in garments.names}}
+    if not keep:
+        return row, None
     return row, {"dart": dart, "track": track, "garment": kept[worst][0], "body": kept[worst][1], "first_body": kept[0][1]}
 
 
@@ -170,16 +175,15 @@ def main() -> None:
     for name, (waist, friction, ease, motions, over) in CONFIGURATIONS.items():
         rows = []
         for motion in motions:
-            row, worst = run(motion, waist, friction, ease, over)
-            if name == DEFAULT and motion == "sit":
+            taken_apart = name == DEFAULT and motion == "sit"
+            row, worst = run(motion, waist, friction, ease, over, keep=taken_apart)
+            if taken_apart:
                 document["worst_sit"] = {"frame": row["worst_frame"], **where(worst)}
             rows.append(row)
             print(name, json.dumps(row), flush=True)
         document["configurations"][name] = rows
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    temporary = args.out.with_suffix(".tmp")
-    temporary.write_text(json.dumps(document, indent=1))
-    temporary.replace(args.out)
+    with atomic_path(args.out) as temporary:
+        temporary.write_text(json.dumps(document, indent=1))
     print(table(document))
 
 
