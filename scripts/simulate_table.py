@@ -1,7 +1,7 @@
 """Simulate every shipped garment on every shipped motion, and every garment with each seam regime;
 print the tables of docs/simulation.md and keep the numbers in docs/data/simulation_table.json.
 
-    python scripts/simulate_table.py [--jobs 2]
+    python scripts/simulate_table.py [--jobs 2] [--garments long-pants,short-pants]
 
 Table 1: default settings, every seam stiff (the DARTs' default), garment x motion (``--motions``,
 default ``TABLE_MOTIONS``, the whole motion).
@@ -108,14 +108,17 @@ def main() -> None:
                         help=f"motions of table 1 (default {','.join(TABLE_MOTIONS)})")
     parser.add_argument("--keep-regimes", action="store_true",
                         help="rerun only the garment x motion table; keep the regime rows already in the JSON")
+    parser.add_argument("--garments", default=",".join(shipped_garments()),
+                        help="rerun only these garments' rows; keep the others' already in the JSON (default: all)")
     args = parser.parse_args()
     motions = [m for m in args.motions.split(",") if m in shipped_motions()]
-    jobs = [(g, m, "stiff") for g in shipped_garments() for m in motions]
+    garments = [g for g in shipped_garments() if g in args.garments.split(",")]
+    every = [(g, m, "stiff") for g in shipped_garments() for m in motions]
+    every += [(g, "walk", regime) for g in shipped_garments() for regime in REGIME_RUNS]
+    jobs = [job for job in every if job[0] in garments and not (args.keep_regimes and job[2] != "stiff")]
     kept = []
-    if args.keep_regimes and RESULTS.exists():
-        kept = [r for r in json.loads(RESULTS.read_text()) if r["regime"] != "stiff"]
-    else:
-        jobs += [(g, "walk", regime) for g in shipped_garments() for regime in REGIME_RUNS]
+    if RESULTS.exists():
+        kept = [r for r in json.loads(RESULTS.read_text()) if (r["garment"], r["motion"], r["regime"]) not in jobs]
     done = [json.loads(line) for line in PARTIAL.read_text().splitlines()] if PARTIAL.exists() else []
     finished = {(r["garment"], r["motion"], r["regime"]) for r in done}
     rows = list(done)
@@ -126,7 +129,7 @@ def main() -> None:
             rows.append(row)
     rows += kept
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    order = {job: index for index, job in enumerate(jobs)}
+    order = {job: index for index, job in enumerate(every)}
     rows.sort(key=lambda r: order.get((r["garment"], r["motion"], r["regime"]), len(order)))
     RESULTS.write_text(json.dumps(rows, indent=1))
     PARTIAL.unlink()

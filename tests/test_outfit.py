@@ -120,9 +120,13 @@ def test_loop_cap_closes_a_loop_turning_its_way():
 
 
 def test_capped_inner_garment_encloses_the_body_under_it(body):
-    """With its openings capped the inner garment is closed, facing out: body points within 1 cm of
-    the trousers are inside them by the winding number, points 10 cm outside are not, and the top
-    over them starts outside (layer order 0 at rest)."""
+    """With its openings capped the inner garment is closed, facing out: body points within 3.5 cm of
+    the trousers (cut 6 mm off at the waist, 3 cm below it) and 2 cm or more inside their openings'
+    heights are inside them by the winding number, points 2 cm outside are not (the legs' inner sides
+    face each other closer than 10 cm), and the top over them starts outside, but for a few particles
+    in the seat's cleft, which the pants' sitting allowance bridges and the top follows down (under
+    the pants' cloth at rest 0.17 %, 0.18 % for the shipped pair; 0 before the allowance; the docs'
+    bound for any outfit at rest is 0.3 %)."""
     from darts.dart.build import make_dart
     from darts.geometry.distance import SurfaceDistance
 
@@ -134,15 +138,17 @@ def test_capped_inner_garment_encloses_the_body_under_it(body):
     assert len(outfit.caps) == sum(len(loop) - 2 for name, loop in model.loops.items() if name.startswith("pants/"))
     surface = SurfaceDistance(model.rest, closed_surface(outfit, 0))
     near, _, _ = SurfaceDistance(model.rest, model.faces[model.layer[model.faces[:, 0]] == 0]).query(
-        shaped, max_dist=0.01, winding=False)
-    under = shaped[np.abs(near) < 0.0099]
+        shaped, max_dist=0.035, winding=False)
+    heights = {name.split("/")[1]: model.rest[loop, 1] for name, loop in model.loops.items() if name.startswith("pants/")}
+    between = (shaped[:, 1] < heights.pop("waist").min() - 0.02) & (shaped[:, 1] > max(h.max() for h in heights.values()) + 0.02)
+    under = shaped[(np.abs(near) < 0.0349) & between]
     sign, _, _ = surface.query(under, winding=True)
     assert len(under) > 500 and np.mean(sign < 0) > 0.95
     _, _, outward = surface.query(pants, winding=False)
-    sign, _, _ = surface.query(pants + 0.1 * outward, winding=True)
+    sign, _, _ = surface.query(pants + 0.02 * outward, winding=True)
     assert np.mean(sign > 0) > 0.95
     under_cloth, inside = layer_order(outfit, model.rest, shaped, body.faces)
-    assert under_cloth == {"top in pants": 0.0} and inside["top in pants"] <= 0.005
+    assert under_cloth["top in pants"] <= 0.003 and inside["top in pants"] <= 0.005
 
 
 def test_garments_for_different_bodies_are_refused():

@@ -169,8 +169,10 @@ def test_the_posed_line_regressor_sees_a_sample_as_it_was_rendered(made, body):
 
 def test_a_posed_render_is_read_as_the_outfit_it_shows(made):
     """Given only the picture, the posed render of short pants worn with a short-sleeve top is read
-    as exactly those two garments (the rules and the outfit network together), each parsed where
-    its true mask is: the top at IoU 0.85 and the small shorts at 0.44 when written."""
+    as exactly those two garments (the rules and the outfit network together; the shorts at 70 %,
+    the top at 100 % when written), each parsed where its true mask is: the top at IoU 0.75 and the
+    small shorts at 0.55 (0.85 and 0.44, the shorts at over 80 %, when the shorts were cut 6 mm off
+    the body, before their sitting allowance)."""
     import darts
 
     out, _, _, samples = made
@@ -179,10 +181,10 @@ def test_a_posed_render_is_read_as_the_outfit_it_shows(made):
     assert (meta["category"], meta["other"]) == ("short-pants", "short-sleeve-top")
     outfit = darts.read_outfit(folder / "image.png")
     assert [(g.kind, g.category) for g in outfit.garments] == [("lower", "short-pants"), ("upper", "short-sleeve-top")]
-    assert all(g.probability > 0.8 for g in outfit.garments)
+    assert all(g.probability > 0.6 for g in outfit.garments)
     truth = {"lower": folder / "mask.png", "upper": folder / "other_mask.png"}
     iou = {}
     for kind, path in truth.items():
         true, parsed = np.asarray(Image.open(path)) > 127, outfit.mask(kind)
         iou[kind] = (true & parsed).sum() / (true | parsed).sum()
-    assert iou["upper"] > 0.75 and iou["lower"] > 0.35, iou
+    assert iou["upper"] > 0.66 and iou["lower"] > 0.48, iou

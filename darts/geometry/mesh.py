@@ -78,6 +78,21 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
 
 
+def smoothed_vertex_normals(vertices: np.ndarray, faces: np.ndarray, rings: int) -> np.ndarray:
+    """Unit vertex normals averaged ``rings`` times over each vertex and its edge neighbours
+    (n <- (n_i + sum_j n_j) / (1 + deg i), then normalised): across a hollow narrower than about
+    ``rings`` edges they point out of it, where the raw normals point at each other."""
+    edges = unique_edges(faces)
+    degree = np.bincount(edges.reshape(-1), minlength=len(vertices))[:, None]
+    normals = vertex_normals(vertices, faces)
+    for _ in range(rings):
+        total = normals.copy()
+        np.add.at(total, edges[:, 0], normals[edges[:, 1]])
+        np.add.at(total, edges[:, 1], normals[edges[:, 0]])
+        normals = total / (1.0 + degree)
+    return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+
+
 def loop_length(vertices: np.ndarray, loop: np.ndarray) -> float:
     """Length of a closed polyline."""
     pts = vertices[loop]

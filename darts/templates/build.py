@@ -17,13 +17,15 @@ from scipy.sparse.csgraph import connected_components
 from darts.body.model import BodyModel
 from darts.errors import DartsInputError
 from darts.geometry.levelset import compact, insert_level_set, keep_side
-from darts.geometry.mesh import boundary_loops, directed_edges, unique_edges, vertex_normals
+from darts.geometry.mesh import boundary_loops, directed_edges, smoothed_vertex_normals, unique_edges, vertex_normals
 from darts.geometry.remesh import remesh
 from darts.geometry.slivers import remove_slivers
 from darts.templates.categories import CATEGORIES, SIDES, Category, seam_fields
-from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH, EDGE_LENGTH_RANGE
+from darts.templates.defaults import CROTCH_EASE_TAPER, DEFAULT_EASE, DEFAULT_EDGE_LENGTH, EDGE_LENGTH_RANGE, SEAT_EASE_TAPER
 from darts.templates.landmarks import Landmarks, above_field, arm_field, below_field, landmarks, neckline_field
 
+#: rings of neighbours a trousers' sitting allowance's offset direction is averaged over (``_add_ease``)
+DEEP_EASE_RINGS = 6
 #: edges shorter than this fraction of the median edge are collapsed (seam insertion leaves them)
 MIN_EDGE_FRACTION = 1 / 3
 
@@ -159,20 +161,43 @@ def _insert_seams(vertices, faces, category: Category, lm: Landmarks):
     return vertices, faces, {name: np.concatenate(parts) for name, parts in seams.items()}
 
 
-def _add_ease(vertices, faces, body_vertices, body_faces, ease: float):
-    """Offset along the normals by ``ease``, then push any vertex still closer than ease/2 to the
-    body out to ``ease`` along the body normal at its closest point."""
+def ease_profile(vertices: np.ndarray, ease: float, seat_ease: float | None) -> np.ndarray:
+    """Each vertex's ease (m, [V]) for a cut surface ``vertices`` (canonical frame, Y up): ``ease``
+    everywhere, or with a ``seat_ease`` (trousers' sitting allowance) ``ease`` at the waist line (the
+    top, y_max) growing linearly to ``seat_ease`` at ``SEAT_EASE_TAPER`` below it,
+    e(v) = ease + (seat_ease - ease) * clip((y_max - y_v) / SEAT_EASE_TAPER, 0, 1) * clip(|v - c| /
+    CROTCH_EASE_TAPER, 0, 1), c the crotch point (the lowest vertex within 1 cm of the mid-plane
+    x = 0), which keeps ``ease``: a snug waistband and crotch around room for the seat, thighs and
+    knees to fold into."""
+    if seat_ease is None:
+        return np.full(len(vertices), ease)
+    depth = vertices[:, 1].max() - vertices[:, 1]
+    middle = np.flatnonzero(np.abs(vertices[:, 0]) < 0.01)
+    crotch = vertices[middle[np.argmin(vertices[middle, 1])]]
+    away = np.linalg.norm(vertices - crotch, axis=1)
+    return ease + (seat_ease - ease) * np.clip(depth / SEAT_EASE_TAPER, 0.0, 1.0) * np.clip(away / CROTCH_EASE_TAPER, 0.0, 1.0)
+
+
+def _add_ease(vertices, faces, body_vertices, body_faces, ease: np.ndarray, snug: float):
+    """Offset each vertex by its ``ease`` (m, [V]): ``snug`` along its normal and the rest
+    (``ease - snug``, trousers' sitting allowance) along the normals smoothed over
+    ``DEEP_EASE_RINGS`` rings (offset 3 cm along its own normals, the seat's cleft folded the
+    trousers' back over itself); then push any vertex still closer than half its ease to the body
+    out to its ease along the body normal at its closest point."""
     from darts.geometry.distance import SurfaceDistance  # starts Warp only when needed
 
-    vertices = vertices + ease * vertex_normals(vertices, faces)
+    deep = ease - snug
+    moved = vertices + snug * vertex_normals(vertices, faces)
+    if deep.any():
+        moved = moved + deep[:, None] * smoothed_vertex_normals(vertices, faces, DEEP_EASE_RINGS)
     distance = SurfaceDistance(body_vertices, body_faces)
     for _ in range(5):
-        signed, closest, normal = distance.query(vertices)
+        signed, closest, normal = distance.query(moved)
         close = signed < 0.5 * ease
         if not close.any():
             break
-        vertices[close] = closest[close] + ease * normal[close]
-    return vertices
+        moved[close] = closest[close] + ease[close, None] * normal[close]
+    return moved
 
 
 def name_loops(category: Category, vertices: np.ndarray, loops: list[np.ndarray]) -> dict[str, np.ndarray]:
@@ -212,20 +237,24 @@ def _name_lines(category: Category, vertices: np.ndarray, faces: np.ndarray) -> 
 
 
 def build_template(category_id: str, body: BodyModel, betas=None, edge_length: float = DEFAULT_EDGE_LENGTH,
-                   ease: float = DEFAULT_EASE) -> Template:
-    """The template of ``category_id`` for ``body`` with shape ``betas`` (canonical frame, metres)."""
+                   ease: float = DEFAULT_EASE, seat_ease: float | None = None) -> Template:
+    """The template of ``category_id`` for ``body`` with shape ``betas`` (canonical frame, metres),
+    cut ``ease`` off the body (``ease_profile``), below a trousers' waistband ``seat_ease`` (None:
+    the category's own, ``Category.seat_ease``; give ``ease`` again for one ease everywhere)."""
     if category_id not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{category_id}' (known: {', '.join(CATEGORIES)})")
     if not (EDGE_LENGTH_RANGE[0] <= edge_length <= EDGE_LENGTH_RANGE[1]):
         raise DartsInputError(None, f"edge length must be between {EDGE_LENGTH_RANGE[0]:g} and {EDGE_LENGTH_RANGE[1]:g} m, "
                                     f"got {edge_length}")
-    if not (0.0 <= ease <= 0.05):
-        raise DartsInputError(None, f"ease must be between 0 and 0.05 m, got {ease}")
     category = CATEGORIES[category_id]
+    seat_ease = category.seat_ease if seat_ease is None else seat_ease
+    for name, value in (("ease", ease), ("seat ease", seat_ease)):
+        if value is not None and not (0.0 <= value <= 0.05):
+            raise DartsInputError(None, f"{name} must be between 0 and 0.05 m, got {value}")
     shaped, joints = body.shaped(betas)
     body_vertices, joints = shaped[0].double().detach().numpy(), joints[0].double().detach().numpy()
     try:
-        return _cut_from_body(category, body, body_vertices, joints, edge_length, ease)
+        return _cut_from_body(category, body, body_vertices, joints, edge_length, ease, seat_ease)
     except DartsInputError:
         raise
     except (RuntimeError, ValueError) as exc:  # the cut's own checks, on a body no human surface
@@ -234,13 +263,13 @@ def build_template(category_id: str, body: BodyModel, betas=None, edge_length: f
 
 
 def _cut_from_body(category: Category, body: BodyModel, body_vertices: np.ndarray, joints: np.ndarray,
-                   edge_length: float, ease: float) -> Template:
+                   edge_length: float, ease: float, seat_ease: float | None) -> Template:
     """``build_template``'s template of ``category`` cut from the shaped body (``body_vertices``,
     ``joints``; canonical frame, metres)."""
     lm = landmarks(body_vertices, joints, body.joint_names)
     vertices, faces, hull = _base_surface(category, body_vertices, body.faces, lm, edge_length)
     vertices, faces, seams = _insert_seams(vertices, faces, category, lm)
-    vertices = _add_ease(vertices, faces, body_vertices, body.faces, ease)
+    vertices = _add_ease(vertices, faces, body_vertices, body.faces, ease_profile(vertices, ease, seat_ease), ease)
     edges = unique_edges(faces)
     median = float(np.median(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)))
     vertices, faces, seams, _ = remove_slivers(vertices, faces, seams, MIN_EDGE_FRACTION * median)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from darts.templates.defaults import SEAT_EASE
 from darts.templates.landmarks import Landmarks
 
 SIDES = ("left", "right")
@@ -19,13 +20,16 @@ SIDES = ("left", "right")
 class Category:
     """family: top | dress | pants | skirt. sleeve: the cuff's position along the arm (0 at the
     shoulder joint = sleeveless armhole, 1 elbow, 2 wrist), None without sleeves. hem: height of
-    the hem (tops, dresses, skirts) or of the leg hems (pants) from the landmarks."""
+    the hem (tops, dresses, skirts) or of the leg hems (pants) from the landmarks. seat_ease: the
+    cloth's distance off the body below the waistband (m; a sitting allowance), None for the
+    template's ease everywhere."""
 
     id: str
     family: str
     description: str
     hem: Callable[[Landmarks], float]
     sleeve: float | None = None
+    seat_ease: float | None = None
 
     @property
     def line_names(self) -> list[str]:
@@ -55,8 +59,10 @@ CATEGORIES: dict[str, Category] = {c.id: c for c in [
     Category("long-sleeve-dress", "dress", "long-sleeve dress, knee length", _dress_hem, sleeve=1.92),
     Category("short-sleeve-dress", "dress", "short-sleeve dress, knee length", _dress_hem, sleeve=0.45),
     Category("sleeveless-dress", "dress", "no-sleeve dress, knee length", _dress_hem, sleeve=0.0),
-    Category("long-pants", "pants", "long pants (trousers), hems above the ankles", lambda lm: lm.ankle_y + 0.04),
-    Category("short-pants", "pants", "short pants (shorts), hems at mid-thigh", lambda lm: lm.crotch_y - 0.12),
+    Category("long-pants", "pants", "long pants (trousers), hems above the ankles", lambda lm: lm.ankle_y + 0.04,
+             seat_ease=SEAT_EASE),
+    Category("short-pants", "pants", "short pants (shorts), hems at mid-thigh", lambda lm: lm.crotch_y - 0.12,
+             seat_ease=SEAT_EASE),
     Category("long-skirt", "skirt", "long skirt, hem at mid-calf", lambda lm: lm.knee_y - 0.18),
     Category("short-skirt", "skirt", "short skirt, hem at mid-thigh", lambda lm: lm.crotch_y - 0.14),
 ]}

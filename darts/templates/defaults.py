@@ -8,3 +8,12 @@ DATASET_EDGE_LENGTH = 0.02
 #: metres: the edge lengths a template can be cut at (finer runs out of memory, coarser loses the body's shape)
 EDGE_LENGTH_RANGE = (0.003, 0.1)
 DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal
+#: metres: trousers' sitting allowance, their ease below the waistband (which keeps ``DEFAULT_EASE``):
+#: cut at 6 mm the long pants stretch 34 % (p99) sitting and squatting on the default body; cut with
+#: this room they stay under 15 % (docs/simulation.md, "strain-waist")
+SEAT_EASE = 0.03
+#: metres below the waist line over which trousers' ease grows from ``DEFAULT_EASE`` to ``SEAT_EASE``
+SEAT_EASE_TAPER = 0.12
+#: metres from the crotch point over which trousers' ease grows from ``DEFAULT_EASE`` to ``SEAT_EASE``
+#: (offset 3 cm there, the inseams' two sides met and left edges no sliver pass could remove)
+CROTCH_EASE_TAPER = 0.08

@@ -87,10 +87,11 @@ def garment_recipe(seed: int, index: int, categories: tuple[str, ...] = tuple(CA
     return GarmentRecipe(seed, index, category, split, tuple(round(float(b), 4) for b in betas), edits)
 
 
-def recipe_garment(recipe: GarmentRecipe, body) -> tuple:
+def recipe_garment(recipe: GarmentRecipe, body, template=None) -> tuple:
     """(the recipe's DART, the CRDL's report, {"template_s", "crdl_s"} seconds): its category's
-    template made on the recipe's body shape at the dataset's edge length, welded, then deformed by
-    the CRDL to the recipe's edits with the default ease (``body``: the ``BodyModel``)."""
+    template made on the recipe's body shape at the dataset's edge length (or ``template``, a DART
+    of that category on that shape), welded, then deformed by the CRDL to the recipe's edits with
+    the default ease as clearance (``body``: the ``BodyModel``)."""
     import time
 
     from darts.crdl.deform import deform_dart, weld_garment
@@ -99,7 +100,8 @@ def recipe_garment(recipe: GarmentRecipe, body) -> tuple:
     from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
 
     started = time.perf_counter()
-    template = make_dart(recipe.category, body, betas=np.asarray(recipe.betas), edge_length=DATASET_EDGE_LENGTH)
+    if template is None:
+        template = make_dart(recipe.category, body, betas=np.asarray(recipe.betas), edge_length=DATASET_EDGE_LENGTH)
     built = time.perf_counter()
     welded = weld_garment(template)
     targets = edit_targets(recipe.category, welded.vertices, welded.lines, list(recipe.edits))
