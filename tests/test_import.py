@@ -495,22 +495,29 @@ def test_trousers_shortened_and_let_out_are_placed_on_their_openings_edit():
     """Issue 47's held-out row 6: long pants 8.3 cm shorter and 4.6 cm wider at the hems. Placed on
     the unedited template they come out millimetres low (the raised hems pull them down); refined on
     the shape of their openings' fitted edit (``placed_on_edit``) they lie within 0.5 mm of where
-    the edit put them on average, and closer than the placement alone."""
+    the edit put them on average, and closer than the placement alone. On the trousers cut 6 mm off
+    everywhere, as they were shipped when this was measured: with the sitting allowance the same
+    edit is placed 1.8 mm off and refined to 0.8 mm (docs/import.md)."""
     import darts
     from darts.body.io import load_body
     from darts.crdl.deform import fit_surface, weld_garment
+    from darts.dart.build import dart_from_template
     from darts.dart.model import welded
     from darts.meshimport.align import align_to_template, apply_matrix
     from darts.meshimport.register import placed_on_edit
+    from darts.templates.build import build_template
     from darts.templates.categories import CATEGORIES
+    from darts.templates.defaults import DEFAULT_EASE
 
-    pants = darts.load_garment("long-pants")
+    body = load_body(None)
+    pants = dart_from_template(build_template("long-pants", body, ease=DEFAULT_EASE, seat_ease=DEFAULT_EASE), "pants",
+                               body.name)
     edited = darts.deform(pants, edits=["hem=-0.083", "hem_width=0.046"])[0]
     vertices, faces = (np.asarray(a) for a in welded(edited)[:2])
     vertices = vertices.astype(np.float64)
     turn = Rotation.from_euler("y", 15, degrees=True)
     moved, faces, loops, _ = repair_garment_mesh(turn.apply(vertices) + [0.2, -0.1, 0.3], faces, "pants")
-    template, body = weld_garment(pants), load_body(None)
+    template = weld_garment(pants)
     surface = fit_surface(pants, body)
     placed = align_to_template(moved, faces, loops, CATEGORIES["long-pants"], template.vertices, template.faces,
                                template.lines, surface)

@@ -285,6 +285,25 @@ def test_a_seat_ease_out_of_range_is_refused(body):
         build_template("long-pants", body, seat_ease=0.2)
 
 
+def test_template_command_cuts_trousers_to_a_chosen_seat_ease(run_darts, tmp_path, body_distance):
+    """``darts template long-pants --seat-ease 0.006`` cuts them as close as every other template
+    (6 mm off the body below the waistband too); a seat ease for a skirt, or out of range, is one
+    line, exit 2, nothing written."""
+    out = tmp_path / "fitted.npz"
+    code, _, err = run_darts("template", "long-pants", "--seat-ease", "0.006", "--edge-length", "0.03", "-o", out)
+    assert code == 0, err
+    dart = load_dart(out)
+    vertices = np.asarray(dart.vertices, np.float64)
+    below = vertices[:, 1].max() - vertices[:, 1] > SEAT_EASE_TAPER + 0.02
+    assert np.median(body_distance.query(vertices[below])[0]) == pytest.approx(DEFAULT_EASE, abs=1e-3)
+    for args, message in ((["short-skirt", "--seat-ease", "0.02"], "seat_ease is for trousers (long-pants, short-pants)"),
+                          (["short-pants", "--seat-ease", "0.2"], "seat_ease must be a number in [0, 0.05]")):
+        bad = tmp_path / "bad.npz"
+        code, _, err = run_darts("template", *args, "-o", bad)
+        assert code == 2 and message in err and err.count("\n") == 1, err
+        assert not bad.exists()
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("category, betas", [
     ("sleeveless-dress", [-2.0, 1.5, -1.0]),  # the dress bridge once came out mis-oriented here

@@ -14,7 +14,7 @@ from darts.fileio import atomic_path, check_output
 from darts.geometry.mesh import loop_length, vertex_normals
 from darts.shipped import garment_help
 from darts.templates.categories import CATEGORIES
-from darts.templates.defaults import DEFAULT_EDGE_LENGTH
+from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH, SEAT_EASE
 
 
 def template(args) -> int:
@@ -30,7 +30,8 @@ def template(args) -> int:
     check_output(args.output, (".npz",))
     for text in args.seam:
         parse_seam_setting(text)  # refused before the body loads
-    dart = api.template(args.category, args.body, args.betas, args.edge_length, args.seam, args.accessory, args.material)
+    dart = api.template(args.category, args.body, args.betas, args.edge_length, args.seam, args.accessory, args.material,
+                        args.seat_ease)
     api.save_garment(dart, args.output)
     print(f"wrote {args.output}: {args.category}, {len(dart.vertices)} vertices, {len(dart.faces)} faces, "
           f"{len(dart.panel_names)} panels, {len(dart.seams)} seams, {len(dart.pairs)} seam pairs")
@@ -145,6 +146,9 @@ def add_parsers(groups, add_body_args) -> None:
                       help="seam regime: welded, stiff, loose, repulsive or partial; NAME 'all' sets every seam")
     make.add_argument("--accessory", action="append", default=[], choices=ACCESSORIES, help="stitch a collar or a tie")
     make.add_argument("--material", default="cotton", choices=sorted(MATERIALS))
+    make.add_argument("--seat-ease", type=float, metavar="M",
+                      help=f"trousers only: metres off the body below the waistband (default {SEAT_EASE}, a sitting "
+                           f"allowance; {DEFAULT_EASE} cuts them as close as every other template)")
     add_body_args(make)
     make.set_defaults(run=template)
 

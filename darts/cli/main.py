@@ -5,6 +5,7 @@
     darts body pose MOTION -o OUT.npz [--fps F] [--body PATH] [--betas B ...] [--ground]
     darts motion info MOTION [--json]
     darts template CATEGORY -o garment.npz [--edge-length L] [--seam NAME=REGIME[:STIFFNESS]] [--accessory collar|tie]
+                   [--seat-ease M]
     darts template --list
     darts inspect garment.npz [--json] [--png out.png]
     darts export garment.npz -o out.obj|ply|glb

@@ -53,12 +53,14 @@ def dart_from_template(template: Template, family: str, body_model: str, betas=N
 
 
 def make_dart(category: str, body: BodyModel, betas=None, edge_length: float = DEFAULT_EDGE_LENGTH,
-              seams: list[tuple[str, str, float | None]] = (), accessories: list[str] = (), material: str = "cotton") -> Dart:
-    """The DART of ``category`` on ``body``: template, panels, seam settings (name, regime,
+              seams: list[tuple[str, str, float | None]] = (), accessories: list[str] = (), material: str = "cotton",
+              seat_ease: float | None = None) -> Dart:
+    """The DART of ``category`` on ``body``: template (trousers with ``seat_ease`` below the
+    waistband, None for the category's sitting allowance), panels, seam settings (name, regime,
     stiffness; name 'all' for every seam) and accessories."""
     if material not in MATERIALS:
         raise DartsInputError(None, f"unknown material '{material}' (one of {', '.join(MATERIALS)})")
-    template = build_template(category, body, betas, edge_length)
+    template = build_template(category, body, betas, edge_length, seat_ease=seat_ease)
     dart = dart_from_template(template, CATEGORIES[category].family, body.name, betas, material)
     for name in accessories:
         add_accessory(dart, name, edge_length)

@@ -25,7 +25,7 @@ from darts.templates.defaults import CROTCH_EASE_TAPER, DEFAULT_EASE, DEFAULT_ED
 from darts.templates.landmarks import Landmarks, above_field, arm_field, below_field, landmarks, neckline_field
 
 #: rings of neighbours a trousers' sitting allowance's offset direction is averaged over (``_add_ease``)
-DEEP_EASE_RINGS = 6
+DEEP_EASE_RINGS = 10
 #: edges shorter than this fraction of the median edge are collapsed (seam insertion leaves them)
 MIN_EDGE_FRACTION = 1 / 3
 
