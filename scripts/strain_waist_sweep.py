@@ -64,17 +64,13 @@ def garment(ease: float | None):
     """The long pants: the shipped DART, or the same category cut on the default body with ``ease`` (m)
     everywhere."""
     from darts.body.io import load_body
-    from darts.dart.build import dart_from_template
+    from darts.dart.build import make_dart
     from darts.dart.io import load_dart
     from darts.shipped import resolve_garment
-    from darts.templates.build import build_template
-    from darts.templates.categories import CATEGORIES
 
     if ease is None:
         return load_dart(resolve_garment(GARMENT))
-    body = load_body()
-    return dart_from_template(build_template(GARMENT, body, ease=ease, seat_ease=ease), CATEGORIES[GARMENT].family,
-                              body.name, None, "cotton")
+    return make_dart(GARMENT, load_body(), seat_ease=ease, ease=ease)
 
 
 def run(motion: str, waist: float, friction: float | None, ease: float | None, over: str | None,
@@ -172,8 +168,7 @@ def drape_drops() -> dict[str, list[float]]:
     ``DRAPE_COUNT`` trousers of seed ``DRAPE_SEED``, each cut on the recipe's body and deformed to
     its edits as the dataset does (``sim.dataset.recipe.recipe_garment``)."""
     from darts.body.io import load_body
-    from darts.dart.build import dart_from_template
-    from darts.templates.build import build_template
+    from darts.dart.build import make_dart
     from darts.templates.categories import CATEGORIES
     from darts.templates.defaults import DATASET_EDGE_LENGTH
     from sim.dataset.drape import drape
@@ -186,9 +181,8 @@ def drape_drops() -> dict[str, list[float]]:
     for name, (ease, seat_ease) in DRAPE_CUTS.items():
         drops[name] = []
         for recipe in recipes:
-            betas = np.asarray(recipe.betas)
-            template = dart_from_template(build_template(recipe.category, body, betas, DATASET_EDGE_LENGTH, ease, seat_ease),
-                                          "pants", body.name, betas, "cotton")
+            template = make_dart(recipe.category, body, np.asarray(recipe.betas), DATASET_EDGE_LENGTH,
+                                 seat_ease=seat_ease, ease=ease)
             dart, _, _ = recipe_garment(recipe, body, template)
             waist = np.asarray(dart.lines["waist"])
             settled = drape(dart, body, "pants").vertices

@@ -139,13 +139,10 @@ def test_local_global_goes_on_from_the_better_of_its_two_starts(body, shipped):
     the hem up into a cuff, far below the evenly compressed leg the rest start ends in; on a coarse
     template cut 6 mm off the body everywhere (without the trousers' sitting allowance) the cuff
     does not form and the rest start is better. Either way the solver's answer is the better one's."""
-    from darts.dart.build import dart_from_template
-    from darts.templates.build import build_template
     from darts.templates.defaults import DEFAULT_EASE
 
-    dart = load_dart(resolve_garment("long-pants")) if shipped else dart_from_template(
-        build_template("long-pants", body, edge_length=COARSE, ease=DEFAULT_EASE, seat_ease=DEFAULT_EASE), "pants",
-        body.name)
+    dart = load_dart(resolve_garment("long-pants")) if shipped else make_dart("long-pants", body, edge_length=COARSE,
+                                                                              seat_ease=DEFAULT_EASE)
     garment = weld_garment(dart)
     surface = fit_surface(dart, body)
     lines = edit_targets(dart.category, garment.vertices, garment.lines, [("hem", -0.10), ("waist", 0.02)])

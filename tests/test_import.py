@@ -501,17 +501,15 @@ def test_trousers_shortened_and_let_out_are_placed_on_their_openings_edit():
     import darts
     from darts.body.io import load_body
     from darts.crdl.deform import fit_surface, weld_garment
-    from darts.dart.build import dart_from_template
+    from darts.dart.build import make_dart
     from darts.dart.model import welded
     from darts.meshimport.align import align_to_template, apply_matrix
     from darts.meshimport.register import placed_on_edit
-    from darts.templates.build import build_template
     from darts.templates.categories import CATEGORIES
     from darts.templates.defaults import DEFAULT_EASE
 
     body = load_body(None)
-    pants = dart_from_template(build_template("long-pants", body, ease=DEFAULT_EASE, seat_ease=DEFAULT_EASE), "pants",
-                               body.name)
+    pants = make_dart("long-pants", body, seat_ease=DEFAULT_EASE)
     edited = darts.deform(pants, edits=["hem=-0.083", "hem_width=0.046"])[0]
     vertices, faces = (np.asarray(a) for a in welded(edited)[:2])
     vertices = vertices.astype(np.float64)
