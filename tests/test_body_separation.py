@@ -10,7 +10,7 @@ from darts.body.segmentation import PART_INDEX
 from darts.geometry.mesh import vertex_normals
 from darts.motion.amass import load_motion
 from scenes import MOTIONS_DIR
-from sim.body_separation import ITERATIONS, MOVABLE_PARTS, STEP, BodySeparation, separate_parts
+from sim.body_separation import ARM_GAP_FACTOR, ITERATIONS, MOVABLE_PARTS, STEP, BodySeparation, separate_parts
 from sim.body_track import build_body_track
 from sim.engine.settings import SimSettings
 
@@ -39,15 +39,15 @@ def inside_another_part(vertices: np.ndarray, faces: np.ndarray, candidates: np.
     return candidates[winding_numbers(vertices, faces, probes) > 0.5]
 
 
-def two_spheres(overlap: float):
+def two_spheres(overlap: float, first: str = "left_thigh", second: str = "left_calf"):
     """Two unit-ish spheres (radius 0.1 m) whose surfaces overlap by ``overlap`` m, as one mesh; the
-    first labelled a thigh, the second a calf (parts that may move)."""
+    first labelled ``first``, the second ``second`` (by default a thigh and a calf: parts that may move)."""
     a = trimesh.creation.icosphere(subdivisions=3, radius=0.1)
     b = trimesh.creation.icosphere(subdivisions=3, radius=0.1)
     b.apply_translation([0.2 - overlap, 0.0, 0.0])
     vertices = np.vstack([a.vertices, b.vertices])
     faces = np.vstack([a.faces, b.faces + len(a.vertices)])
-    parts = np.r_[np.full(len(a.vertices), PART_INDEX["left_thigh"]), np.full(len(b.vertices), PART_INDEX["left_calf"])]
+    parts = np.r_[np.full(len(a.vertices), PART_INDEX[first]), np.full(len(b.vertices), PART_INDEX[second])]
     return vertices, faces, parts, len(a.vertices)
 
 
@@ -68,6 +68,19 @@ def test_two_overlapping_spheres_are_pressed_a_gap_apart():
     moved = np.linalg.norm(separated - vertices, axis=1)
     assert moved.max() <= ITERATIONS * STEP + 1e-9
     assert (moved[:first][vertices[:first, 0] < 0.0] == 0).all()
+
+
+def test_an_upper_arm_and_the_torso_are_pressed_further_apart():
+    """Room for a top's two layers between the arm and the chest: ARM_GAP_FACTOR gaps, where a thigh
+    and a calf (above) meet one gap apart; a forearm against the torso keeps one gap."""
+    gap = 0.01
+    for first, second, expected in [("upper_torso", "right_upper_arm", ARM_GAP_FACTOR * gap),
+                                    ("left_upper_arm", "lower_torso", ARM_GAP_FACTOR * gap),
+                                    ("upper_torso", "left_forearm", gap)]:
+        vertices, faces, parts, count = two_spheres(0.0, first, second)  # touching
+        separated = BodySeparation(faces, parts, gap)(vertices)
+        closest = np.linalg.norm(separated[:count, None] - separated[None, count:], axis=2).min()
+        assert 0.75 * expected <= closest <= 1.25 * expected, (first, second, closest)
 
 
 def test_parts_apart_by_more_than_the_gap_and_a_zero_gap_are_left_alone():
