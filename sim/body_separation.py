@@ -90,8 +90,9 @@ def _separating_moves(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), normal: 
         reach = REACH
     out = wp.mesh_query_ray(mesh, p + 1.0e-4 * n, n, reach)
     g = gap
-    if out.result and group[i] + face_group[out.face] == 3:
-        g = arm_gap
+    if out.result:
+        if group[i] + face_group[out.face] == 3:  # an upper arm and the torso
+            g = arm_gap
     if out.result and out.sign < 0.0:
         amount = wp.min(0.5 * (wp.min(inward.t, DEPTH_CAP) + g), STEP)
     elif out.result and out.t < g:
