@@ -20,7 +20,7 @@ import numpy as np
 from darts import arguments as check
 from darts.errors import DartsInputError
 from darts.shipped import resolve_garment, resolve_motion
-from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH, EDGE_LENGTH_RANGE
+from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EDGE_LENGTH, EASE_RANGE, EDGE_LENGTH_RANGE
 
 PathLike = str | os.PathLike
 
@@ -103,10 +103,7 @@ def template(category: str, body=None, betas: Sequence[float] | None = None, edg
     accessories = check.text_list(accessories, "accessories", "collar")
     check.text(material, "material")
     if seat_ease is not None:
-        seat_ease = check.number(seat_ease, "seat_ease", 0.0, 0.05)
-        if CATEGORIES[category].seat_ease is None:
-            trousers = ", ".join(name for name, c in CATEGORIES.items() if c.seat_ease is not None)
-            raise DartsInputError(None, f"seat_ease is for trousers ({trousers}), not {category}")
+        seat_ease = check.number(seat_ease, "seat_ease", *EASE_RANGE)  # trousers only: build_template refuses others
     return make_dart(category, _body_for(body, betas), betas, edge_length, settings, list(accessories), material,
                      seat_ease)
 

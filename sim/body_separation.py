@@ -20,10 +20,10 @@ part. The moves are averaged twice with each vertex's one-ring (d <- (d + mean o
 the flesh around a pressed spot gives too; none of it into a part that keeps its shape); a move
 that would turn a face over against the skinned body's is halved, up to ``UNFOLD_HALVINGS`` times,
 then held; the vertices move, and the normals and rays are taken again for the moved vertices and
-their rings, up to ``ITERATIONS`` rounds or until no move reaches ``TOLERANCE``. Only the parts a garment covers move
-(torso, hips, arms, thighs, calves): the head, neck, hands and feet keep their shape (the bundled
-body's own mesh overlaps itself a little at the toes and fingers, which is no cloth's business),
-while a part pressed against them still gives way.
+their rings, up to ``ITERATIONS`` rounds or until no move reaches ``TOLERANCE``. Only the parts a
+garment covers move (torso, hips, arms, thighs, calves): the head, neck, hands and feet keep their
+shape (the bundled body's own mesh overlaps itself a little at the toes and fingers, which is no
+cloth's business), while a part pressed against them still gives way.
 
 The moves depend on the pose alone (no state is carried from frame to frame), so they follow it;
 frames without any overlap or near contact are left exactly as skinned.

@@ -21,7 +21,14 @@ from darts.geometry.mesh import boundary_loops, directed_edges, smoothed_vertex_
 from darts.geometry.remesh import remesh
 from darts.geometry.slivers import remove_slivers
 from darts.templates.categories import CATEGORIES, SIDES, Category, seam_fields
-from darts.templates.defaults import CROTCH_EASE_TAPER, DEFAULT_EASE, DEFAULT_EDGE_LENGTH, EDGE_LENGTH_RANGE, SEAT_EASE_TAPER
+from darts.templates.defaults import (
+    CROTCH_EASE_TAPER,
+    DEFAULT_EASE,
+    DEFAULT_EDGE_LENGTH,
+    EASE_RANGE,
+    EDGE_LENGTH_RANGE,
+    SEAT_EASE_TAPER,
+)
 from darts.templates.landmarks import Landmarks, above_field, arm_field, below_field, landmarks, neckline_field
 
 #: rings of neighbours a trousers' sitting allowance's offset direction is averaged over (``_add_ease``)
@@ -247,10 +254,13 @@ def build_template(category_id: str, body: BodyModel, betas=None, edge_length: f
         raise DartsInputError(None, f"edge length must be between {EDGE_LENGTH_RANGE[0]:g} and {EDGE_LENGTH_RANGE[1]:g} m, "
                                     f"got {edge_length}")
     category = CATEGORIES[category_id]
+    if seat_ease is not None and category.seat_ease is None:
+        trousers = ", ".join(name for name, c in CATEGORIES.items() if c.seat_ease is not None)
+        raise DartsInputError(None, f"seat_ease is for trousers ({trousers}), not {category_id}")
     seat_ease = category.seat_ease if seat_ease is None else seat_ease
     for name, value in (("ease", ease), ("seat ease", seat_ease)):
-        if value is not None and not (0.0 <= value <= 0.05):
-            raise DartsInputError(None, f"{name} must be between 0 and 0.05 m, got {value}")
+        if value is not None and not (EASE_RANGE[0] <= value <= EASE_RANGE[1]):
+            raise DartsInputError(None, f"{name} must be between {EASE_RANGE[0]:g} and {EASE_RANGE[1]:g} m, got {value}")
     shaped, joints = body.shaped(betas)
     body_vertices, joints = shaped[0].double().detach().numpy(), joints[0].double().detach().numpy()
     try:

@@ -8,6 +8,8 @@ DATASET_EDGE_LENGTH = 0.02
 #: metres: the edge lengths a template can be cut at (finer runs out of memory, coarser loses the body's shape)
 EDGE_LENGTH_RANGE = (0.003, 0.1)
 DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal
+#: metres: the eases a template can be cut at (its ease and a trousers' seat ease)
+EASE_RANGE = (0.0, 0.05)
 #: metres: trousers' sitting allowance, their ease below the waistband (which keeps ``DEFAULT_EASE``):
 #: cut at 6 mm the long pants stretch 34 % (p99) sitting and squatting on the default body; cut with
 #: this room they stay under 15 % (docs/simulation.md, "strain-waist")
