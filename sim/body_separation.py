@@ -31,10 +31,9 @@ frames without any overlap or near contact are left exactly as skinned.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from darts.body.segmentation import PART_INDEX
-from darts.geometry.mesh import unique_edges
+from darts.geometry.mesh import face_normals, unique_edges
 from darts.geometry.warp_runtime import warp
 
 wp = warp()
@@ -100,13 +99,22 @@ def _separating_moves(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), normal: 
     move[i] = -amount * n
 
 
-def ring_average(faces: np.ndarray, count: int) -> sp.csr_matrix:
-    """[count, count] sparse: row v averages v's one-ring neighbours (the vertices sharing an edge)."""
+def padded_lists(keys: np.ndarray, values: np.ndarray, count: int, pad: int) -> np.ndarray:
+    """[count, D] the ``values`` paired with each key 0..count-1 (pairs ``keys``, ``values``), in
+    increasing order, each row padded with ``pad`` (D: the longest list)."""
+    order = np.lexsort((values, keys))
+    keys, values = keys[order], values[order]
+    length = np.bincount(keys, minlength=count)
+    table = np.full((count, max(int(length.max(initial=0)), 1)), pad, np.int64)
+    table[keys, np.arange(len(keys)) - np.repeat(np.cumsum(length) - length, length)] = values
+    return table
+
+
+def one_rings(faces: np.ndarray, count: int) -> np.ndarray:
+    """[count, D] each vertex's one-ring neighbours (the vertices sharing an edge with it), in
+    increasing order, padded with ``count``."""
     edges = unique_edges(np.asarray(faces, np.int64).reshape(-1, 3))
-    rows, cols = np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]]
-    adjacency = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(count, count))
-    degree = np.maximum(np.asarray(adjacency.sum(1)).ravel(), 1.0)
-    return sp.diags(1.0 / degree) @ adjacency
+    return padded_lists(np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]], count, count)
 
 
 class BodySeparation:
@@ -123,9 +131,12 @@ class BodySeparation:
             group[np.asarray(parts) == PART_INDEX[name]] = value
         self.group = wp.array(group, dtype=wp.int32, device="cpu")
         self.face_group = wp.array(group[self.faces[:, 0]], dtype=wp.int32, device="cpu")  # a face: its first corner's
-        self.ring = ring_average(self.faces, self.count)
+        self.rings = one_rings(self.faces, self.count)
+        self.ring_weight = 1.0 / np.maximum((self.rings < self.count).sum(1), 1)[:, None]  # the ring average's
         self.movable = np.isin(np.asarray(parts), [PART_INDEX[name] for name in MOVABLE_PARTS])
-        self.neighbours = (self.ring > 0).astype(np.float64)
+        self.every_movable = wp.array(np.flatnonzero(self.movable).astype(np.int32), dtype=wp.int32, device="cpu")
+        self.vertex_faces = padded_lists(self.faces.reshape(-1), np.repeat(np.arange(len(self.faces)), 3), self.count,
+                                         len(self.faces))
         self.points = wp.zeros(self.count, dtype=wp.vec3, device="cpu")
         self.indices = wp.array(self.faces.reshape(-1), dtype=wp.int32, device="cpu")
         self.mesh = None  # built on the first frame's points (a tree built on zeros would be refit into a poor one)
@@ -136,8 +147,8 @@ class BodySeparation:
         """``vertices`` [V,3] of one frame with its parts moved apart (a new array; the same values
         where nothing overlaps or comes within the gap)."""
         points = np.array(vertices, np.float64)
-        posed = np.asarray(vertices, np.float64)
-        active = np.flatnonzero(self.movable)
+        posed_normals = None  # the skinned body's face normals, taken once a move needs them
+        active = self.every_movable
         for _ in range(ITERATIONS):
             self.points.assign(points.astype(np.float32))
             if self.mesh is None:
@@ -146,40 +157,63 @@ class BodySeparation:
             self.normal.zero_()
             self.move.zero_()
             wp.launch(_face_normals_to_vertices, len(self.faces), [self.points, self.indices, self.normal], device="cpu")
-            wp.launch(_separating_moves, len(active), [self.mesh.id, self.points, self.normal,
-                                                       wp.array(active.astype(np.int32), dtype=wp.int32, device="cpu"),
-                                                       self.group, self.face_group, self.gap,
-                                                       ARM_GAP_FACTOR * self.gap, self.move], device="cpu")
+            wp.launch(_separating_moves, len(active), [self.mesh.id, self.points, self.normal, active, self.group,
+                                                       self.face_group, self.gap, ARM_GAP_FACTOR * self.gap, self.move],
+                      device="cpu")
             move = self.move.numpy().astype(np.float64)
             if np.abs(move).max(initial=0.0) < TOLERANCE:
                 break
+            # the moves reach two rings by the averages: only rows near a move are averaged (the others stay 0)
+            region = _moving(move)
             for _ in range(SMOOTHING):
-                move = 0.5 * (move + self.ring @ move)
+                region = self._with_ring(region)
+                move[region] = 0.5 * (move[region] + self._ring_average(move, region))
             move[~self.movable] = 0.0  # the average reaches a ring into the parts that keep their shape
-            points += self._unfolding(posed, points, move)
-            moved = np.abs(move).max(1) > 0
-            active = np.flatnonzero(self.movable & (moved | (self.neighbours @ moved > 0)))
+            if posed_normals is None:
+                posed_normals = face_normals(np.asarray(vertices, np.float64), self.faces)
+            points += self._unfolding(posed_normals, points, move)
+            near_moves = self._with_ring(_moving(move))
+            active = wp.array(near_moves[self.movable[near_moves]].astype(np.int32), dtype=wp.int32, device="cpu")
         return points
 
-    def _unfolding(self, posed: np.ndarray, points: np.ndarray, move: np.ndarray) -> np.ndarray:
+    def _with_ring(self, vertices: np.ndarray) -> np.ndarray:
+        """The sorted ``vertices`` and their one-ring neighbours."""
+        around = np.union1d(vertices, self.rings[vertices])
+        return around[:-1] if len(around) and around[-1] == self.count else around  # less the padding
+
+    def _ring_average(self, move: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """[len(rows),3] the mean of ``move`` [V,3] over each of ``rows``' one-ring (summed in ring order)."""
+        padded = np.concatenate([move, np.zeros((1, 3))])
+        weight = self.ring_weight[rows]
+        total = np.zeros((len(rows), 3))
+        for column in self.rings[rows].T:
+            total += weight * padded[column]
+        return total
+
+    def _unfolding(self, posed_normals: np.ndarray, points: np.ndarray, move: np.ndarray) -> np.ndarray:
         """``move`` [V,3] of ``points`` with the moves of a face's corners halved, up to
-        ``UNFOLD_HALVINGS`` times, while the face would end turned over against the ``posed`` one
-        (its normal at more than 90 degrees to the skinned body's), then stopped."""
-        touched = np.flatnonzero(np.abs(move).max(1)[self.faces].any(1))
-        faces = self.faces[touched]
+        ``UNFOLD_HALVINGS`` times, while the face would end turned over against the skinned body's
+        (its normal at more than 90 degrees to ``posed_normals`` [F,3]), then stopped."""
+        touched = np.unique(self.vertex_faces[_moving(move)])
+        touched = touched[:-1] if len(touched) and touched[-1] == len(self.faces) else touched  # less the padding
+        faces, before = self.faces[touched], posed_normals[touched]
 
-        def normals(v):
-            return np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])
+        def turned_over():
+            return (face_normals(points + move, faces) * before).sum(1) <= 0.0
 
-        before = normals(posed)
         for _ in range(UNFOLD_HALVINGS):
-            turned = (normals(points + move) * before).sum(1) <= 0.0
+            turned = turned_over()
             if not turned.any():
                 return move
             move[np.unique(faces[turned])] *= 0.5
-        while (turned := (normals(points + move) * before).sum(1) <= 0.0).any():
+        while (turned := turned_over()).any():
             move[np.unique(faces[turned])] = 0.0  # kept still: a face whose corners all stay cannot turn
         return move
+
+
+def _moving(move: np.ndarray) -> np.ndarray:
+    """The vertices whose ``move`` [V,3] is not zero, in order."""
+    return np.flatnonzero((move != 0.0).any(1))
 
 
 def separate_parts(vertices: np.ndarray, faces: np.ndarray, parts: np.ndarray, gap: float) -> np.ndarray:

@@ -69,9 +69,15 @@ def edge_manifold(faces: np.ndarray) -> bool:
     return bool((counts == 1).all() and (ucounts <= 2).all())
 
 
+def face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """[F,3] (b - a) x (c - a) of each face (a, b, c): its normal, twice its area long."""
+    a = vertices[faces[:, 0]]
+    return np.cross(vertices[faces[:, 1]] - a, vertices[faces[:, 2]] - a)
+
+
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Area-weighted unit vertex normals."""
-    face_n = np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]])
+    face_n = face_normals(vertices, faces)
     normals = np.zeros_like(vertices)
     for k in range(3):
         np.add.at(normals, faces[:, k], face_n)
