@@ -87,12 +87,14 @@ def pose(motion, body=None, betas: Sequence[float] | None = None, ground: bool =
 
 def template(category: str, body=None, betas: Sequence[float] | None = None, edge_length: float = DEFAULT_EDGE_LENGTH,
              seams: Sequence[str] = (), accessories: Sequence[str] = (), material: str = "cotton",
-             seat_ease: float | None = None):
+             seat_ease: float | None = None, ease: float | None = None):
     """The DART of ``category`` (``darts.templates.categories.CATEGORIES``) cut from the body shaped
     by ``betas``: target edge length in metres, seam settings ``NAME=REGIME[:STIFFNESS]`` (NAME
-    ``all`` for every seam), accessories (``collar``, ``tie``), a material name and, for trousers,
-    the ease below the waistband in metres (None: the sitting allowance, ``SEAT_EASE``; 0.006 cuts
-    them as close as every other template)."""
+    ``all`` for every seam), accessories (``collar``, ``tie``), a material name, the ease in metres
+    (the cloth's distance off the body; None: the category's, ``WEARING_EASE`` for tops and
+    dresses, ``DEFAULT_EASE`` for skirts and trousers) and, for trousers, the ease below the
+    waistband in metres (None: the sitting allowance, ``SEAT_EASE``; 0.006 cuts them as close as a
+    skirt)."""
     from darts.dart.build import make_dart
     from darts.dart.model import parse_seam_setting
     from darts.templates.categories import CATEGORIES
@@ -104,8 +106,10 @@ def template(category: str, body=None, betas: Sequence[float] | None = None, edg
     check.text(material, "material")
     if seat_ease is not None:
         seat_ease = check.number(seat_ease, "seat_ease", *EASE_RANGE)  # trousers only: build_template refuses others
+    if ease is not None:
+        ease = check.number(ease, "ease", *EASE_RANGE)
     return make_dart(category, _body_for(body, betas), betas, edge_length, settings, list(accessories), material,
-                     seat_ease)
+                     seat_ease, ease)
 
 
 def deform(garment, lines=None, edits: Sequence[str] = (), body=None, mask=None, camera=None,

@@ -62,7 +62,7 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
     from darts.geometry.loops import feature_lines
     from darts.raycast import cast
     from darts.regress.pipeline import reconstruct
-    from darts.templates.defaults import DATASET_EDGE_LENGTH
+    from darts.templates.defaults import DATASET_EASE, DATASET_EDGE_LENGTH
 
     start = time.process_time()
     try:
@@ -107,7 +107,8 @@ def garment_measures(image: np.ndarray, mask: np.ndarray | None, truth_mask: np.
         from_truth = np.abs(SurfaceDistance(vertices, dart.faces).query(truth_vertices, winding=False)[0]).mean()
         return iou, float(50 * (to_truth + from_truth)), line_chamfer(dart)
 
-    template = make_dart(result.report["category"], body, betas=betas, edge_length=DATASET_EDGE_LENGTH)
+    template = make_dart(result.report["category"], body, betas=betas, edge_length=DATASET_EDGE_LENGTH,
+                         ease=DATASET_EASE)
     (iou, chamfer, lines), (template_iou, template_chamfer, template_lines) = measures(result.dart), measures(template)
     return {"reconstruct_s": seconds, "posed": True, "category": result.report["category"], "garment_iou": iou,
             "template_iou": template_iou, "surface_chamfer_cm": chamfer, "template_chamfer_cm": template_chamfer,

@@ -79,7 +79,7 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
     from darts.fileio import read_image, read_npz
     from darts.regress.pipeline import reconstruct
     from darts.regress.quality import reconstruction_measures
-    from darts.templates.defaults import DATASET_EDGE_LENGTH
+    from darts.templates.defaults import DATASET_EASE, DATASET_EDGE_LENGTH
     from sim.api import simulate
 
     sample = Path(job.inputs["sample"])
@@ -88,7 +88,8 @@ def end_to_end_job(job: Job, folder: Path) -> dict:
     image, mask = read_image(sample / "image.png"), read_image(sample / "mask.png", "L") > 127
     camera = Camera.from_json(sample / "camera.json")
     result = reconstruct(image, body, None, camera, mask, betas=meta["betas"])
-    baseline = make_dart(result.report["category"], body, betas=np.asarray(meta["betas"]), edge_length=DATASET_EDGE_LENGTH)
+    baseline = make_dart(result.report["category"], body, betas=np.asarray(meta["betas"]), edge_length=DATASET_EDGE_LENGTH,
+                         ease=DATASET_EASE)
     draped = read_npz(sample / "draped.npz")
 
     def measure(dart) -> dict:

@@ -14,7 +14,7 @@ from darts.fileio import atomic_path, check_output
 from darts.geometry.mesh import loop_length, vertex_normals
 from darts.shipped import garment_help
 from darts.templates.categories import CATEGORIES
-from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH, SEAT_EASE
+from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH, SEAT_EASE, WEARING_EASE
 
 
 def template(args) -> int:
@@ -31,7 +31,7 @@ def template(args) -> int:
     for text in args.seam:
         parse_seam_setting(text)  # refused before the body loads
     dart = api.template(args.category, args.body, args.betas, args.edge_length, args.seam, args.accessory, args.material,
-                        args.seat_ease)
+                        args.seat_ease, args.ease)
     api.save_garment(dart, args.output)
     print(f"wrote {args.output}: {args.category}, {len(dart.vertices)} vertices, {len(dart.faces)} faces, "
           f"{len(dart.panel_names)} panels, {len(dart.seams)} seams, {len(dart.pairs)} seam pairs")
@@ -146,9 +146,12 @@ def add_parsers(groups, add_body_args) -> None:
                       help="seam regime: welded, stiff, loose, repulsive or partial; NAME 'all' sets every seam")
     make.add_argument("--accessory", action="append", default=[], choices=ACCESSORIES, help="stitch a collar or a tie")
     make.add_argument("--material", default="cotton", choices=sorted(MATERIALS))
+    make.add_argument("--ease", type=float, metavar="M",
+                      help=f"metres off the body (default: the category's, {WEARING_EASE} for tops and dresses, a "
+                           f"wearing ease; {DEFAULT_EASE} for skirts and trousers)")
     make.add_argument("--seat-ease", type=float, metavar="M",
                       help=f"trousers only: metres off the body below the waistband (default {SEAT_EASE}, a sitting "
-                           f"allowance; {DEFAULT_EASE} cuts them as close as every other template)")
+                           f"allowance; {DEFAULT_EASE} cuts them as close as a skirt)")
     add_body_args(make)
     make.set_defaults(run=template)
 

@@ -10,7 +10,7 @@ from darts.dart.panels import split_panels
 from darts.errors import DartsInputError
 from darts.templates.build import Template, build_template
 from darts.templates.categories import CATEGORIES
-from darts.templates.defaults import DEFAULT_EASE, DEFAULT_EDGE_LENGTH
+from darts.templates.defaults import DEFAULT_EDGE_LENGTH
 
 
 def _panel_name(centroid: np.ndarray, template: Template, family: str) -> str:
@@ -54,10 +54,11 @@ def dart_from_template(template: Template, family: str, body_model: str, betas=N
 
 def make_dart(category: str, body: BodyModel, betas=None, edge_length: float = DEFAULT_EDGE_LENGTH,
               seams: list[tuple[str, str, float | None]] = (), accessories: list[str] = (), material: str = "cotton",
-              seat_ease: float | None = None, ease: float = DEFAULT_EASE) -> Dart:
-    """The DART of ``category`` on ``body``: template (cut ``ease`` off the body; trousers
-    ``seat_ease`` below the waistband, None for the category's sitting allowance), panels, seam
-    settings (name, regime, stiffness; name 'all' for every seam) and accessories."""
+              seat_ease: float | None = None, ease: float | None = None) -> Dart:
+    """The DART of ``category`` on ``body``: template (cut ``ease`` off the body, None for the
+    category's; trousers ``seat_ease`` below the waistband, None for the category's sitting
+    allowance), panels, seam settings (name, regime, stiffness; name 'all' for every seam) and
+    accessories."""
     if material not in MATERIALS:
         raise DartsInputError(None, f"unknown material '{material}' (one of {', '.join(MATERIALS)})")
     template = build_template(category, body, betas, edge_length, ease, seat_ease)

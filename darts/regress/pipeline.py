@@ -30,7 +30,7 @@ from darts.errors import DartsInputError
 from darts.regress.data import CATEGORY_IDS, camera_batch, initial_lines, padded
 from darts.regress.shipped import shipped_model
 from darts.templates.categories import CATEGORIES
-from darts.templates.defaults import DATASET_EDGE_LENGTH
+from darts.templates.defaults import DATASET_EASE, DATASET_EDGE_LENGTH
 
 
 def network_input(image: np.ndarray) -> torch.Tensor:
@@ -231,7 +231,8 @@ def _reconstruct(image: np.ndarray, body, category: str | None = None, camera: C
     if (camera.width, camera.height) != (width, height):
         raise DartsInputError(None, f"the camera is {camera.width}x{camera.height} pixels but the image is {width}x{height}")
     mark = time.perf_counter()
-    template = make_dart(category, body, betas=None if not betas else np.asarray(betas), edge_length=edge_length)
+    template = make_dart(category, body, betas=None if not betas else np.asarray(betas), edge_length=edge_length,
+                         ease=DATASET_EASE)  # the cut its networks were trained on
     times["template_s"] = time.perf_counter() - mark
     mark = time.perf_counter()
     length_report, length_targets = None, None

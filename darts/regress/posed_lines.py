@@ -197,7 +197,7 @@ def posed_garment(folder: Path, category: str, body) -> PosedGarment:
     from darts.meshimport.align import umeyama
     from darts.motion.amass import load_motion
     from darts.shipped import resolve_motion
-    from darts.templates.defaults import DATASET_EDGE_LENGTH
+    from darts.templates.defaults import DATASET_EASE, DATASET_EDGE_LENGTH
 
     meta = json.loads((folder / "meta.json").read_text())
     betas = np.asarray(meta["betas"], np.float64)
@@ -205,7 +205,7 @@ def posed_garment(folder: Path, category: str, body) -> PosedGarment:
     dart = load_dart(folder / "garment.npz")
     lines = feature_lines(dart, dart.vertices)
     rest = np.stack([lines[name] for name in CATEGORIES[category].line_names])
-    start = template_lines(make_dart(category, body, betas=betas, edge_length=DATASET_EDGE_LENGTH), category)
+    start = template_lines(make_dart(category, body, betas=betas, edge_length=DATASET_EDGE_LENGTH, ease=DATASET_EASE), category)
     posing = posing_of(body, pose, betas, start)
     free = body.to(torch.float64)(torch.as_tensor(pose)[None], torch.as_tensor(betas)[None]).vertices[0].numpy()
     with np.load(folder / "posed.npz") as data:

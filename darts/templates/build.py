@@ -207,6 +207,23 @@ def _add_ease(vertices, faces, body_vertices, body_faces, ease: np.ndarray, snug
     return moved
 
 
+def _wearing_ease(vertices: np.ndarray, faces: np.ndarray, extra: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(``vertices`` moved ``extra`` (m, [V]) further off the body along their normals smoothed over
+    ``DEEP_EASE_RINGS`` rings, ``faces``): a smooth outward offset, which keeps every edge about as long
+    as it was (cut that far along each vertex's own normal, before the slivers were removed, the
+    junctions of seams at the shoulders crowded into edges of a millimetre the sliver pass could not
+    remove)."""
+    return vertices + extra[:, None] * smoothed_vertex_normals(vertices, faces, DEEP_EASE_RINGS), faces
+
+
+def _without_slivers(vertices: np.ndarray, faces: np.ndarray, seams: dict) -> tuple[np.ndarray, np.ndarray, dict]:
+    """``remove_slivers`` of every edge under ``MIN_EDGE_FRACTION`` x the median edge."""
+    edges = unique_edges(faces)
+    median = float(np.median(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)))
+    vertices, faces, seams, _ = remove_slivers(vertices, faces, seams, MIN_EDGE_FRACTION * median)
+    return vertices, faces, seams
+
+
 def name_loops(category: Category, vertices: np.ndarray, loops: list[np.ndarray]) -> dict[str, np.ndarray]:
     """The category's feature lines among ``loops`` (one per line name), named by where their
     centres sit in the canonical frame (Y up, left +X): cuffs leftmost and rightmost, then the
@@ -244,10 +261,11 @@ def _name_lines(category: Category, vertices: np.ndarray, faces: np.ndarray) -> 
 
 
 def build_template(category_id: str, body: BodyModel, betas=None, edge_length: float = DEFAULT_EDGE_LENGTH,
-                   ease: float = DEFAULT_EASE, seat_ease: float | None = None) -> Template:
+                   ease: float | None = None, seat_ease: float | None = None) -> Template:
     """The template of ``category_id`` for ``body`` with shape ``betas`` (canonical frame, metres),
-    cut ``ease`` off the body (``ease_profile``), below a trousers' waistband ``seat_ease`` (None:
-    the category's own, ``Category.seat_ease``; give ``ease`` again for one ease everywhere)."""
+    cut ``ease`` off the body (``ease_profile``; None: the category's own, ``Category.ease``), below
+    a trousers' waistband ``seat_ease`` (None: the category's own, ``Category.seat_ease``; give
+    ``ease`` again for one ease everywhere)."""
     if category_id not in CATEGORIES:
         raise DartsInputError(None, f"unknown category '{category_id}' (known: {', '.join(CATEGORIES)})")
     if not (EDGE_LENGTH_RANGE[0] <= edge_length <= EDGE_LENGTH_RANGE[1]):
@@ -257,6 +275,7 @@ def build_template(category_id: str, body: BodyModel, betas=None, edge_length: f
     if seat_ease is not None and category.seat_ease is None:
         trousers = ", ".join(name for name, c in CATEGORIES.items() if c.seat_ease is not None)
         raise DartsInputError(None, f"seat_ease is for trousers ({trousers}), not {category_id}")
+    ease = category.ease if ease is None else ease
     seat_ease = category.seat_ease if seat_ease is None else seat_ease
     for name, value in (("ease", ease), ("seat ease", seat_ease)):
         if value is not None and not (EASE_RANGE[0] <= value <= EASE_RANGE[1]):
@@ -279,8 +298,10 @@ def _cut_from_body(category: Category, body: BodyModel, body_vertices: np.ndarra
     lm = landmarks(body_vertices, joints, body.joint_names)
     vertices, faces, hull = _base_surface(category, body_vertices, body.faces, lm, edge_length)
     vertices, faces, seams = _insert_seams(vertices, faces, category, lm)
-    vertices = _add_ease(vertices, faces, body_vertices, body.faces, ease_profile(vertices, ease, seat_ease), ease)
-    edges = unique_edges(faces)
-    median = float(np.median(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)))
-    vertices, faces, seams, _ = remove_slivers(vertices, faces, seams, MIN_EDGE_FRACTION * median)
+    cut = min(ease, DEFAULT_EASE)  # the rest of a larger ease (a wearing ease) once the slivers are gone
+    vertices = _add_ease(vertices, faces, body_vertices, body.faces, ease_profile(vertices, cut, seat_ease), cut)
+    vertices, faces, seams = _without_slivers(vertices, faces, seams)
+    if ease > cut:  # a smooth offset: it shortens an edge only a little, in a hollow (an armpit's)
+        extra = ease_profile(vertices, ease, seat_ease) - ease_profile(vertices, cut, seat_ease)
+        vertices, faces, seams = _without_slivers(*_wearing_ease(vertices, faces, extra), seams)
     return Template(category.id, vertices, faces, _name_lines(category, vertices, faces), seams, hull, lm)

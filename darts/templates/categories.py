@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from darts.templates.defaults import SEAT_EASE
+from darts.templates.defaults import DEFAULT_EASE, SEAT_EASE, WEARING_EASE
 from darts.templates.landmarks import Landmarks
 
 SIDES = ("left", "right")
@@ -20,15 +20,16 @@ SIDES = ("left", "right")
 class Category:
     """family: top | dress | pants | skirt. sleeve: the cuff's position along the arm (0 at the
     shoulder joint = sleeveless armhole, 1 elbow, 2 wrist), None without sleeves. hem: height of
-    the hem (tops, dresses, skirts) or of the leg hems (pants) from the landmarks. seat_ease: the
-    cloth's distance off the body below the waistband (m; a sitting allowance), None for the
-    template's ease everywhere."""
+    the hem (tops, dresses, skirts) or of the leg hems (pants) from the landmarks. ease: the cloth's
+    distance off the body (m; tops and dresses a wearing ease). seat_ease: the cloth's distance off
+    the body below the waistband (m; a sitting allowance), None for the template's ease everywhere."""
 
     id: str
     family: str
     description: str
     hem: Callable[[Landmarks], float]
     sleeve: float | None = None
+    ease: float = DEFAULT_EASE
     seat_ease: float | None = None
 
     @property
@@ -53,12 +54,18 @@ def _dress_hem(lm: Landmarks) -> float:
 
 
 CATEGORIES: dict[str, Category] = {c.id: c for c in [
-    Category("long-sleeve-top", "top", "long-sleeve top, hem at the hips", _top_hem, sleeve=1.92),
-    Category("short-sleeve-top", "top", "short-sleeve top (T-shirt), hem at the hips", _top_hem, sleeve=0.45),
-    Category("sleeveless-top", "top", "no-sleeve top, armholes at the shoulder joints", _top_hem, sleeve=0.0),
-    Category("long-sleeve-dress", "dress", "long-sleeve dress, knee length", _dress_hem, sleeve=1.92),
-    Category("short-sleeve-dress", "dress", "short-sleeve dress, knee length", _dress_hem, sleeve=0.45),
-    Category("sleeveless-dress", "dress", "no-sleeve dress, knee length", _dress_hem, sleeve=0.0),
+    Category("long-sleeve-top", "top", "long-sleeve top, hem at the hips", _top_hem, sleeve=1.92,
+             ease=WEARING_EASE),
+    Category("short-sleeve-top", "top", "short-sleeve top (T-shirt), hem at the hips", _top_hem, sleeve=0.45,
+             ease=WEARING_EASE),
+    Category("sleeveless-top", "top", "no-sleeve top, armholes at the shoulder joints", _top_hem, sleeve=0.0,
+             ease=WEARING_EASE),
+    Category("long-sleeve-dress", "dress", "long-sleeve dress, knee length", _dress_hem, sleeve=1.92,
+             ease=WEARING_EASE),
+    Category("short-sleeve-dress", "dress", "short-sleeve dress, knee length", _dress_hem, sleeve=0.45,
+             ease=WEARING_EASE),
+    Category("sleeveless-dress", "dress", "no-sleeve dress, knee length", _dress_hem, sleeve=0.0,
+             ease=WEARING_EASE),
     Category("long-pants", "pants", "long pants (trousers), hems above the ankles", lambda lm: lm.ankle_y + 0.04,
              seat_ease=SEAT_EASE),
     Category("short-pants", "pants", "short pants (shorts), hems at mid-thigh", lambda lm: lm.crotch_y - 0.12,

@@ -7,7 +7,14 @@ DEFAULT_EDGE_LENGTH = 0.011  # metres: a short-sleeve top gets about 6k vertices
 DATASET_EDGE_LENGTH = 0.02
 #: metres: the edge lengths a template can be cut at (finer runs out of memory, coarser loses the body's shape)
 EDGE_LENGTH_RANGE = (0.003, 0.1)
-DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal
+DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal (skirts, trousers' waistbands)
+#: metres: tops' and dresses' ease, a wearing ease (room to raise the arms and bend): cut at 6 mm the
+#: short-sleeve top stretched 18.7 % (p99) squatting and crossed itself 162 edges deep; at this ease
+#: 12.6 % and 43 (docs/simulation.md)
+WEARING_EASE = 0.012
+#: metres: the ease of the reconstruction's templates (its datasets, ``darts reconstruct``), every
+#: category alike: its networks were trained on templates cut this close
+DATASET_EASE = DEFAULT_EASE
 #: metres: the eases a template can be cut at (its ease and a trousers' seat ease)
 EASE_RANGE = (0.0, 0.05)
 #: metres: trousers' sitting allowance, their ease below the waistband (which keeps ``DEFAULT_EASE``):

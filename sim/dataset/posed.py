@@ -132,7 +132,7 @@ def _posed_garment(body, recipe, posed, dart, track, last: dict, built: float, r
     from darts.dart.io import save_dart
     from darts.fileio import save_npz
     from darts.geometry.loops import feature_lines
-    from darts.templates.defaults import DATASET_EDGE_LENGTH
+    from darts.templates.defaults import DATASET_EASE, DATASET_EDGE_LENGTH
 
     if not result.stable or "garment" not in last:
         return {"status": "unstable", "error": result.message or "no frame", "category": recipe.category,
@@ -143,7 +143,7 @@ def _posed_garment(body, recipe, posed, dart, track, last: dict, built: float, r
     garment = to_sample_frame(track, last["garment"])
     other, other_faces = np.zeros((0, 3)), np.zeros((0, 3), np.int64)
     if posed["other"] is not None:
-        worn = make_dart(posed["other"], body, betas=betas, edge_length=DATASET_EDGE_LENGTH)
+        worn = make_dart(posed["other"], body, betas=betas, edge_length=DATASET_EDGE_LENGTH, ease=DATASET_EASE)
         other, other_faces = carry(rest_body, posed_body, body.faces, np.asarray(worn.vertices, np.float64)), worn.faces
     joints = (body.J_regressor.double().numpy() @ posed_body)
     lines = feature_lines(dart, garment)

@@ -97,11 +97,12 @@ def recipe_garment(recipe: GarmentRecipe, body, template=None) -> tuple:
     from darts.crdl.deform import deform_dart, weld_garment
     from darts.crdl.targets import edit_targets
     from darts.dart.build import make_dart
-    from darts.templates.defaults import DATASET_EDGE_LENGTH, DEFAULT_EASE
+    from darts.templates.defaults import DATASET_EASE, DATASET_EDGE_LENGTH, DEFAULT_EASE
 
     started = time.perf_counter()
     if template is None:
-        template = make_dart(recipe.category, body, betas=np.asarray(recipe.betas), edge_length=DATASET_EDGE_LENGTH)
+        template = make_dart(recipe.category, body, betas=np.asarray(recipe.betas), edge_length=DATASET_EDGE_LENGTH,
+                             ease=DATASET_EASE)
     built = time.perf_counter()
     welded = weld_garment(template)
     targets = edit_targets(recipe.category, welded.vertices, welded.lines, list(recipe.edits))
