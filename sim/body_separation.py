@@ -178,8 +178,7 @@ class BodySeparation:
 
     def _with_ring(self, vertices: np.ndarray) -> np.ndarray:
         """The sorted ``vertices`` and their one-ring neighbours."""
-        around = np.union1d(vertices, self.rings[vertices])
-        return around[:-1] if len(around) and around[-1] == self.count else around  # less the padding
+        return _unpadded(np.union1d(vertices, self.rings[vertices]), self.count)
 
     def _ring_average(self, move: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """[len(rows),3] the mean of ``move`` [V,3] over each of ``rows``' one-ring (summed in ring order)."""
@@ -194,8 +193,7 @@ class BodySeparation:
         """``move`` [V,3] of ``points`` with the moves of a face's corners halved, up to
         ``UNFOLD_HALVINGS`` times, while the face would end turned over against the skinned body's
         (its normal at more than 90 degrees to ``posed_normals`` [F,3]), then stopped."""
-        touched = np.unique(self.vertex_faces[_moving(move)])
-        touched = touched[:-1] if len(touched) and touched[-1] == len(self.faces) else touched  # less the padding
+        touched = _unpadded(np.unique(self.vertex_faces[_moving(move)]), len(self.faces))
         faces, before = self.faces[touched], posed_normals[touched]
 
         def turned_over():
@@ -209,6 +207,11 @@ class BodySeparation:
         while (turned := turned_over()).any():
             move[np.unique(faces[turned])] = 0.0  # kept still: a face whose corners all stay cannot turn
         return move
+
+
+def _unpadded(values: np.ndarray, pad: int) -> np.ndarray:
+    """Sorted unique ``values`` of a ``padded_lists`` table, less its padding ``pad`` (the largest)."""
+    return values[:-1] if len(values) and values[-1] == pad else values
 
 
 def _moving(move: np.ndarray) -> np.ndarray:

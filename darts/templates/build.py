@@ -207,13 +207,12 @@ def _add_ease(vertices, faces, body_vertices, body_faces, ease: np.ndarray, snug
     return moved
 
 
-def _wearing_ease(vertices: np.ndarray, faces: np.ndarray, extra: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(``vertices`` moved ``extra`` (m, [V]) further off the body along their normals smoothed over
-    ``DEEP_EASE_RINGS`` rings, ``faces``): a smooth outward offset, which keeps every edge about as long
-    as it was (cut that far along each vertex's own normal, before the slivers were removed, the
-    junctions of seams at the shoulders crowded into edges of a millimetre the sliver pass could not
-    remove)."""
-    return vertices + extra[:, None] * smoothed_vertex_normals(vertices, faces, DEEP_EASE_RINGS), faces
+def _wearing_ease(vertices: np.ndarray, faces: np.ndarray, extra: np.ndarray) -> np.ndarray:
+    """``vertices`` moved ``extra`` (m, [V]) further off the body along their normals smoothed over
+    ``DEEP_EASE_RINGS`` rings: a smooth outward offset, which keeps every edge about as long as it was
+    (cut that far along each vertex's own normal, before the slivers were removed, the junctions of
+    seams at the shoulders crowded into edges of a millimetre the sliver pass could not remove)."""
+    return vertices + extra[:, None] * smoothed_vertex_normals(vertices, faces, DEEP_EASE_RINGS)
 
 
 def _without_slivers(vertices: np.ndarray, faces: np.ndarray, seams: dict) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -303,5 +302,5 @@ def _cut_from_body(category: Category, body: BodyModel, body_vertices: np.ndarra
     vertices, faces, seams = _without_slivers(vertices, faces, seams)
     if ease > cut:  # a smooth offset: it shortens an edge only a little, in a hollow (an armpit's)
         extra = ease_profile(vertices, ease, seat_ease) - ease_profile(vertices, cut, seat_ease)
-        vertices, faces, seams = _without_slivers(*_wearing_ease(vertices, faces, extra), seams)
+        vertices, faces, seams = _without_slivers(_wearing_ease(vertices, faces, extra), faces, seams)
     return Template(category.id, vertices, faces, _name_lines(category, vertices, faces), seams, hull, lm)

@@ -20,17 +20,22 @@ SIDES = ("left", "right")
 class Category:
     """family: top | dress | pants | skirt. sleeve: the cuff's position along the arm (0 at the
     shoulder joint = sleeveless armhole, 1 elbow, 2 wrist), None without sleeves. hem: height of
-    the hem (tops, dresses, skirts) or of the leg hems (pants) from the landmarks. ease: the cloth's
-    distance off the body (m; tops and dresses a wearing ease). seat_ease: the cloth's distance off
-    the body below the waistband (m; a sitting allowance), None for the template's ease everywhere."""
+    the hem (tops, dresses, skirts) or of the leg hems (pants) from the landmarks. seat_ease: the
+    cloth's distance off the body below the waistband (m; a sitting allowance), None for the
+    template's ease (``ease``) everywhere."""
 
     id: str
     family: str
     description: str
     hem: Callable[[Landmarks], float]
     sleeve: float | None = None
-    ease: float = DEFAULT_EASE
     seat_ease: float | None = None
+
+    @property
+    def ease(self) -> float:
+        """The cloth's distance off the body (m): tops and dresses a wearing ease, skirts and
+        trousers (at the waistband) ``DEFAULT_EASE``."""
+        return WEARING_EASE if self.family in ("top", "dress") else DEFAULT_EASE
 
     @property
     def line_names(self) -> list[str]:
@@ -54,18 +59,12 @@ def _dress_hem(lm: Landmarks) -> float:
 
 
 CATEGORIES: dict[str, Category] = {c.id: c for c in [
-    Category("long-sleeve-top", "top", "long-sleeve top, hem at the hips", _top_hem, sleeve=1.92,
-             ease=WEARING_EASE),
-    Category("short-sleeve-top", "top", "short-sleeve top (T-shirt), hem at the hips", _top_hem, sleeve=0.45,
-             ease=WEARING_EASE),
-    Category("sleeveless-top", "top", "no-sleeve top, armholes at the shoulder joints", _top_hem, sleeve=0.0,
-             ease=WEARING_EASE),
-    Category("long-sleeve-dress", "dress", "long-sleeve dress, knee length", _dress_hem, sleeve=1.92,
-             ease=WEARING_EASE),
-    Category("short-sleeve-dress", "dress", "short-sleeve dress, knee length", _dress_hem, sleeve=0.45,
-             ease=WEARING_EASE),
-    Category("sleeveless-dress", "dress", "no-sleeve dress, knee length", _dress_hem, sleeve=0.0,
-             ease=WEARING_EASE),
+    Category("long-sleeve-top", "top", "long-sleeve top, hem at the hips", _top_hem, sleeve=1.92),
+    Category("short-sleeve-top", "top", "short-sleeve top (T-shirt), hem at the hips", _top_hem, sleeve=0.45),
+    Category("sleeveless-top", "top", "no-sleeve top, armholes at the shoulder joints", _top_hem, sleeve=0.0),
+    Category("long-sleeve-dress", "dress", "long-sleeve dress, knee length", _dress_hem, sleeve=1.92),
+    Category("short-sleeve-dress", "dress", "short-sleeve dress, knee length", _dress_hem, sleeve=0.45),
+    Category("sleeveless-dress", "dress", "no-sleeve dress, knee length", _dress_hem, sleeve=0.0),
     Category("long-pants", "pants", "long pants (trousers), hems above the ankles", lambda lm: lm.ankle_y + 0.04,
              seat_ease=SEAT_EASE),
     Category("short-pants", "pants", "short pants (shorts), hems at mid-thigh", lambda lm: lm.crotch_y - 0.12,
