@@ -10,7 +10,7 @@ EDGE_LENGTH_RANGE = (0.003, 0.1)
 DEFAULT_EASE = 0.006  # metres between the body and the template along the body normal (skirts, trousers' waistbands)
 #: metres: tops' and dresses' ease, a wearing ease (room to raise the arms and bend): cut at 6 mm the
 #: short-sleeve top stretched 18.7 % (p99) squatting and crossed itself 162 edges deep; at this ease
-#: 12.6 % and 43 (docs/simulation.md)
+#: 13.5 % and 116 (docs/simulation.md, table 1)
 WEARING_EASE = 0.012
 #: metres: the ease of the reconstruction's templates (its datasets, ``darts reconstruct``), every
 #: category alike: its networks were trained on templates cut this close
