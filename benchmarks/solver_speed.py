@@ -1,7 +1,8 @@
 """Speed and quality of solver settings, against a baseline run in the same process, on several scenes.
 
     python benchmarks/solver_speed.py [--scenes GARMENT:MOTION ...] [--frames N] [--configurations NAME ...]
-                                      [--profile] [--perturbed N] [--out docs/data/benchmark_solver.json]
+                                      [--variant KEY=VALUE[,KEY=VALUE ...] ...] [--profile] [--perturbed N]
+                                      [--out docs/data/benchmark_solver.json]
 
 Scenes (issue 30): the 6k short-sleeve top on the walk (30 frames after the settle), the short
 skirt and the long pants on the walk and the squat (the whole motion), on the default body at 30 fps
@@ -20,6 +21,9 @@ seconds) is not in the frame rate. ``--profile`` adds where the time of the last
 the crossings are chaotic (a micrometre at the start moves them by tens of per cent at the end of a
 walk): ``--perturbed N`` runs every configuration N more times from start positions moved by a
 micrometre and reports each measure's spread, so that a difference can be told from that noise.
+``--variant untangle_step=0`` adds a row of the default with those ``SimSettings`` fields changed
+(named by its text; after the ``--configurations`` rows), so that a knob is measured against the
+default without editing this file.
 """
 from __future__ import annotations
 
@@ -28,12 +32,14 @@ import cProfile
 import json
 import pstats
 import time
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 
 from darts.body.io import load_body
 from darts.dart.io import load_dart
+from darts.errors import DartsInputError
 from darts.motion.amass import load_motion
 from darts.shipped import resolve_garment, resolve_motion
 from sim.body_track import build_body_track
@@ -178,6 +184,42 @@ def compare(dart, model, track, configurations: dict[str, dict], frames: int, pr
     return results
 
 
+def configuration(start: str) -> str:
+    """The one configuration whose name starts with ``start`` (argparse's error for none or several)."""
+    found = [name for name in CONFIGURATIONS if name.startswith(start)]
+    if len(found) != 1:
+        raise argparse.ArgumentTypeError(f"{start!r} starts {len(found)} configuration names, not one: "
+                                         + "; ".join(name.split(":")[0] for name in CONFIGURATIONS))
+    return found[0]
+
+
+def variant(text: str) -> tuple[str, dict]:
+    """A configuration from ``KEY=VALUE[,KEY=VALUE ...]`` (``SimSettings`` fields; true / false,
+    whole numbers, numbers, else the text), named by ``text``; argparse's error for an unknown key
+    or a value the settings refuse."""
+    names = {f.name for f in fields(SimSettings)}
+    changes = {}
+    for item in text.split(","):
+        key, _, value = item.partition("=")
+        if key not in names or not value:
+            raise argparse.ArgumentTypeError(f"{item!r}: not KEY=VALUE of a SimSettings field")
+        lowered = value.lower()
+        if lowered in ("true", "false"):
+            changes[key] = lowered == "true"
+            continue
+        for kind in (int, float, str):
+            try:
+                changes[key] = kind(value)
+                break
+            except ValueError:
+                continue
+    try:
+        SimSettings(**changes)
+    except DartsInputError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return text, changes
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", nargs="+", default=list(SCENES), metavar="GARMENT:MOTION",
@@ -185,8 +227,11 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=None,
                         help="recorded frames after the settle "
                              "(default: 30 for the first scene, the whole motion for the others)")
-    parser.add_argument("--configurations", nargs="+", default=list(CONFIGURATIONS), choices=list(CONFIGURATIONS),
-                        metavar="NAME", help="which rows (default: all; the first is the baseline)")
+    parser.add_argument("--configurations", nargs="+", default=list(CONFIGURATIONS), type=configuration,
+                        metavar="NAME", help="which rows, each by its name's start, e.g. 'default' or 'small' "
+                                             "(default: all; the first is the baseline)")
+    parser.add_argument("--variant", type=variant, action="append", default=[], metavar="KEY=VALUE[,KEY=VALUE...]",
+                        help="a row more: the default with these SimSettings fields changed (repeatable)")
     parser.add_argument("--profile", action="store_true", help="profile the last configuration (a copy of it, run alongside)")
     parser.add_argument("--perturbed", type=int, default=0, metavar="N",
                         help=f"also run each configuration N times from start positions perturbed by {PERTURBATION:g} m "
@@ -201,8 +246,8 @@ def main() -> None:
         model = cloth_model(dart)
         track = build_body_track(body, load_motion(resolve_motion(motion)), 30.0, 0.5, gap=SimSettings().body_gap)
         frames = args.frames or (30 if index == 0 else len(track.vertices))
-        results = compare(dart, model, track, {name: CONFIGURATIONS[name] for name in args.configurations}, frames,
-                          args.profile, args.perturbed)
+        configurations = {name: CONFIGURATIONS[name] for name in args.configurations} | dict(args.variant)
+        results = compare(dart, model, track, configurations, frames, args.profile, args.perturbed)
         for name, row in results.items():
             print(scene, name, json.dumps(row), flush=True)
         document["scenes"].append({"garment": garment, "motion": motion,
