@@ -223,25 +223,40 @@ def test_a_particle_riding_its_contact_is_searched_again_when_another_part_cover
     assert np.all(_covered_while_riding(refresh=10**6) >= 0)
 
 
-def _deep_patch_heights(limit: float, frames: int) -> np.ndarray:
+def _deep_patch(limit: float, frames: int, pre_stabilise: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """A patch 3 cm deep inside a 10 cm slab (its top at z = 0), one substep of one sweep a frame,
-    no gravity: the particles' heights after ``frames`` frames."""
+    no gravity: the particles' heights and vertical velocities after ``frames`` frames."""
     slab = trimesh.creation.box(extents=(0.4, 0.4, 0.1), transform=trimesh.transformations.translation_matrix(
         (0.0, 0.0, -0.05)))
     patch = np.array([[0.0, -0.001, -0.03], [0.0, 0.001, -0.03], [0.001, 0.0, -0.03]])
     model = cloth_model(sheet_dart(patch, np.array([[0, 1, 2]])))
     settings = SimSettings(substeps=1, iterations=1, gravity=(0.0, 0.0, 0.0), ground=False, air_density=0.0,
-                           self_contact=False, contact_push_limit=limit)
+                           self_contact=False, contact_push_limit=limit, pre_stabilise=pre_stabilise)
     solver = Simulation(model, model.rest, np.asarray(slab.faces), np.asarray(slab.vertices), settings)
     for _ in range(frames):
         solver.step_frame(np.asarray(slab.vertices))
-    return solver.positions()[:, 2]
+    return solver.positions()[:, 2], solver.v.numpy()[:, 2]
 
 
 def test_a_particle_deep_in_the_body_comes_out_at_the_push_limit_a_sweep():
-    assert np.allclose(_deep_patch_heights(0.01, 1), -0.02, atol=1e-6)  # 1 cm of the 3.2 cm it needs
-    assert np.all(_deep_patch_heights(0.01, 2) > -0.001)  # out (and moving) after the next sweep
-    assert np.allclose(_deep_patch_heights(1.0, 1), 0.002, atol=1e-6)  # without the limit: in one leap
+    assert np.allclose(_deep_patch(0.01, 1)[0], -0.02, atol=1e-6)  # 1 cm of the 3.2 cm it needs
+    assert np.allclose(_deep_patch(0.01, 3)[0], 0.0, atol=1e-6)  # 1 cm a sweep
+    assert np.allclose(_deep_patch(0.01, 4)[0], THICKNESS, atol=1e-6)  # out, a thickness off
+    assert np.allclose(_deep_patch(1.0, 1)[0], THICKNESS, atol=1e-6)  # without the limit: in one leap
+
+
+def test_a_push_out_of_a_depth_the_particle_had_is_no_velocity():
+    """Pre-stabilisation: the push out of a depth the particle already had at the substep's start
+    corrects its place and gives it no speed (else 1 cm in a 1/30 s substep is 0.3 m/s, and the
+    next substep carries it on: out after two sweeps instead of four, and flying)."""
+    height, speed = _deep_patch(0.01, 1)
+    assert np.allclose(speed, 0.0, atol=1e-4) and np.allclose(height, -0.02, atol=1e-6)
+    height, speed = _deep_patch(0.01, 4)
+    assert np.allclose(speed, 0.0, atol=1e-4)
+    height, speed = _deep_patch(0.01, 1, pre_stabilise=False)
+    assert np.allclose(speed, 0.01 * 30, rtol=1e-3)  # v = dx / h
+    height, speed = _deep_patch(0.01, 2, pre_stabilise=False)
+    assert np.all(height > -0.001) and np.all(speed > 0.25)  # carried out after the second sweep
 
 
 def test_the_winding_number_tells_the_body_s_own_overlap_apart():

@@ -43,6 +43,25 @@ def velocities_from_positions(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtyp
 
 
 @wp.kernel
+def velocities_less_push_out(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3), dt: float,
+                             normal: wp.array(dtype=wp.vec3), surface_velocity: wp.array(dtype=wp.vec3),
+                             start_depth: wp.array(dtype=float), v: wp.array(dtype=wp.vec3)):
+    """v = (x - x_start - e n) / dt, e = min(d0, max(0, (x - x_start - u dt).n)): the part of the
+    move out along the contact normal n (relative to the surface, moving at u) that only undid the
+    particle's depth d0 inside its contact's thickness at the substep's start is a correction, not
+    motion (pre-stabilisation, Macklin et al. 2014, 4.4: the correction applied to the start
+    position too), so a particle pushed out of a depth it already had does not fly on."""
+    i = wp.tid()
+    move = x[i] - x_start[i]
+    depth = start_depth[i]
+    if depth > 0.0:
+        n = normal[i]
+        out = wp.dot(move - surface_velocity[i] * dt, n)
+        move = move - wp.min(depth, wp.max(out, 0.0)) * n
+    v[i] = move / dt
+
+
+@wp.kernel
 def track_fastest(v: wp.array(dtype=wp.vec3), world: wp.array(dtype=wp.int32), fastest: wp.array(dtype=float)):
     """fastest[w] = max(fastest[w], |v_i|) over the particles i of each world w: the largest speed of
     any substep (reset once a frame), which tells cloth buzzing between contacts inside the substeps

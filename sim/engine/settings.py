@@ -73,6 +73,9 @@ class SimSettings:
     # that shrinks the contour where the garment cuts itself (``SelfContact.untangle``; the edges found at each
     # self-contact broad phase); 0: a cut the contacts let through stays until it opens by itself
     untangle_step: float = 0.001
+    # a push out of a depth a particle already had inside its contact's thickness at the substep's start
+    # is a correction, left out of its velocity (``kernels.velocities_less_push_out``); off: v = dx / h
+    pre_stabilise: bool = True
     max_body_speed: float = 5.0  # m/s the search reach allows for at least (more when the body is faster)
     max_speed: float = _user(50.0, "m/s; a faster particle stops the run as unstable")
     cg_iterations: int = 30  # conjugate-gradient iterations per mass-spring substep

@@ -140,7 +140,12 @@ class Solver:
         if self.settings.self_contact and self.settings.untangle_step > 0.0:
             self.self_contact.untangle(state_out.x, self.inverse_mass, self.settings.untangle_step)
         self.after_friction(state_out, dt)
-        self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
+        if self.settings.pre_stabilise:
+            self.launch(kernels.velocities_less_push_out, self.count,
+                        [state_out.x, state_in.x, dt, collider.contact.normal, collider.contact.velocity,
+                         collider.start_depth, state_out.v])
+        else:
+            self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
         self.launch(kernels.track_fastest, self.count, [state_out.v, self.world, self.fastest])
 
     def after_friction(self, state: ClothState, dt: float) -> None:
