@@ -129,7 +129,8 @@ class BodyCollider:
         with the continuous test from ``x_start`` (positions at the substep's start) and crease
         contacts — the particles that moved by the contact skin since their last search, and every
         particle each ``contact_refresh_interval`` substeps; then put every contact plane where its
-        body face is now."""
+        body face is now and (``pre_stabilise``) record how far each particle was inside its plane's
+        thickness at the substep's start (``start_depth``)."""
         settings = self.settings
         if self.window_start is None:
             self.window_start = wp.clone(x_start)

@@ -133,7 +133,9 @@ class Solver:
         """Friction for the substep's contact pushes (the garment's own layers, then the body), the
         garment's cuts through itself shrunk (``SelfContact.untangle``, edges found at each broad
         phase: twice a frame at the defaults), the solver's ``after_friction`` (the seams see the
-        untangling's moves), then v = (x_out - x_in) / dt."""
+        untangling's moves), then v = (x_out - x_in) / dt, less (``pre_stabilise``) the push out of
+        the depth each particle already had inside its body contact's thickness at the substep's start
+        (``kernels.velocities_less_push_out``)."""
         if self.settings.self_contact:
             self.self_contact.friction(state_in.x, self.inverse_mass, collider.body_push)
         collider.friction(state_out.x, state_in.x, dt)
