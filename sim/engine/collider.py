@@ -88,7 +88,6 @@ class BodyCollider:
         self.query_offset = wp.zeros(count, dtype=wp.vec3, device=device)
         self.body_push = wp.zeros(count, dtype=float, device=device)
         self.ground_push = wp.zeros(count, dtype=float, device=device)
-        self.start_depth = wp.zeros(count, dtype=float, device=device)  # m inside the thickness at the substep's start
         self.body_world = np.zeros(len(body_vertices), np.int64) if body_world is None else np.asarray(body_world)
         self.worlds = int(self.body_world.max(initial=0)) + 1
         self.world = wp.array(np.zeros(count, np.int32) if world is None else np.asarray(world, np.int32), dtype=wp.int32,
@@ -129,8 +128,7 @@ class BodyCollider:
         with the continuous test from ``x_start`` (positions at the substep's start) and crease
         contacts — the particles that moved by the contact skin since their last search, and every
         particle each ``contact_refresh_interval`` substeps; then put every contact plane where its
-        body face is now and (``pre_stabilise``) record how far each particle was inside its plane's
-        thickness at the substep's start (``start_depth``)."""
+        body face is now."""
         settings = self.settings
         if self.window_start is None:
             self.window_start = wp.clone(x_start)
@@ -158,10 +156,6 @@ class BodyCollider:
         self.launch(collider_kernels.track_contacts, self.count,
                     [self.mesh.id, c.face, c.uv, c.local, c.point, c.normal, c.velocity, s.face, s.uv, s.local,
                      s.point, s.normal, s.velocity])
-        if settings.pre_stabilise:
-            self.launch(collider_kernels.start_depths, self.count,
-                        [x_start, c.point, c.normal, c.velocity, c.face, self.thickness, self.offset, dt,
-                         self.start_depth])
 
     def resolve(self, x) -> None:
         """Push particles ``thickness`` outside their contact planes (both, in a crease; at most

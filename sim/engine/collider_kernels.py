@@ -189,23 +189,6 @@ def track_contacts(mesh: wp.uint64, face: wp.array(dtype=wp.int32), uv: wp.array
     track_contact(mesh, i, second_face, second_uv, second_local, second_point, second_normal, second_velocity)
 
 
-@wp.kernel
-def start_depths(x_start: wp.array(dtype=wp.vec3), contact_point: wp.array(dtype=wp.vec3),
-                 contact_normal: wp.array(dtype=wp.vec3), contact_velocity: wp.array(dtype=wp.vec3),
-                 contact_face: wp.array(dtype=wp.int32), thickness: float, offset: wp.array(dtype=float), dt: float,
-                 depth: wp.array(dtype=float)):
-    """How far each particle was inside its contact's thickness (+ offset) at the substep's start,
-    against its contact plane where the face was then (point - u dt): max(0, off - (x_start -
-    point + u dt).n); 0 without a contact."""
-    i = wp.tid()
-    d = 0.0
-    if contact_face[i] >= 0:
-        n = contact_normal[i]
-        start_point = contact_point[i] - contact_velocity[i] * dt
-        d = wp.max(thickness + offset[i] - wp.dot(x_start[i] - start_point, n), 0.0)
-    depth[i] = d
-
-
 @wp.func
 def two_plane_push(d1: float, n1: wp.vec3, d2: float, n2: wp.vec3):
     """Smallest move m with m.n1 >= d1 and m.n2 >= d2 (the particle ``d`` too close to each plane):

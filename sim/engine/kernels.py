@@ -44,20 +44,24 @@ def velocities_from_positions(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtyp
 
 @wp.kernel
 def velocities_less_push_out(x: wp.array(dtype=wp.vec3), x_start: wp.array(dtype=wp.vec3), dt: float,
-                             normal: wp.array(dtype=wp.vec3), surface_velocity: wp.array(dtype=wp.vec3),
-                             start_depth: wp.array(dtype=float), v: wp.array(dtype=wp.vec3)):
+                             contact_point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
+                             surface_velocity: wp.array(dtype=wp.vec3), contact_face: wp.array(dtype=wp.int32),
+                             thickness: float, offset: wp.array(dtype=float), v: wp.array(dtype=wp.vec3)):
     """v = (x - x_start - e n) / dt, e = min(d0, max(0, (x - x_start - u dt).n)): the part of the
     move out along the contact normal n (relative to the surface, moving at u) that only undid the
-    particle's depth d0 inside its contact's thickness at the substep's start is a correction, not
-    motion (pre-stabilisation, Macklin et al. 2014, 4.4: the correction applied to the start
-    position too), so a particle pushed out of a depth it already had does not fly on."""
+    particle's depth d0 = max(0, thickness + offset - (x_start - (point - u dt)).n) inside its
+    contact's thickness at the substep's start (against the plane where its face was then) is a
+    correction, not motion (pre-stabilisation, Macklin et al. 2014, 4.4: the correction applied to the
+    start position too), so a particle pushed out of a depth it already had does not fly on."""
     i = wp.tid()
     move = x[i] - x_start[i]
-    depth = start_depth[i]
-    if depth > 0.0:
+    if contact_face[i] >= 0:
         n = normal[i]
-        out = wp.dot(move - surface_velocity[i] * dt, n)
-        move = move - wp.min(depth, wp.max(out, 0.0)) * n
+        start_point = contact_point[i] - surface_velocity[i] * dt
+        depth = wp.max(thickness + offset[i] - wp.dot(x_start[i] - start_point, n), 0.0)
+        if depth > 0.0:
+            out = wp.dot(move - surface_velocity[i] * dt, n)
+            move = move - wp.min(depth, wp.max(out, 0.0)) * n
     v[i] = move / dt
 
 

@@ -143,9 +143,10 @@ class Solver:
             self.self_contact.untangle(state_out.x, self.inverse_mass, self.settings.untangle_step)
         self.after_friction(state_out, dt)
         if self.settings.pre_stabilise:
+            c = collider.contact
             self.launch(kernels.velocities_less_push_out, self.count,
-                        [state_out.x, state_in.x, dt, collider.contact.normal, collider.contact.velocity,
-                         collider.start_depth, state_out.v])
+                        [state_out.x, state_in.x, dt, c.point, c.normal, c.velocity, c.face, collider.thickness,
+                         collider.offset, state_out.v])
         else:
             self.launch(kernels.velocities_from_positions, self.count, [state_out.x, state_in.x, dt, state_out.v])
         self.launch(kernels.track_fastest, self.count, [state_out.v, self.world, self.fastest])
