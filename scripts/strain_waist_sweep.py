@@ -50,7 +50,7 @@ CONFIGURATIONS = {
     "6 mm cut, under the long-sleeve top": (3.0, None, 0.006, MOTIONS, "long-sleeve-top"),
     "cut with 30 mm ease, under the long-sleeve top": (3.0, None, 0.03, MOTIONS, "long-sleeve-top"),
     "shipped: 6 mm waistband, 30 mm below": (3.0, None, None, (*MOTIONS, "kneel", "walk"), None),
-    "shipped, under the long-sleeve top": (3.0, None, None, MOTIONS, "long-sleeve-top"),
+    "shipped, under the long-sleeve top": (3.0, None, None, (*MOTIONS, "kneel"), "long-sleeve-top"),
 }
 #: the configuration whose worst sitting frame is taken apart (``where``)
 DEFAULT = "6 mm cut (shipped before), waistband grip 3"
