@@ -75,6 +75,41 @@ def test_slerp_halfway_and_resample_keeps_duration(tmp_path):
     assert np.allclose(angles, new_t, atol=1e-5)
 
 
+def _motion_of(body_pose: np.ndarray, fps: float, trans: np.ndarray | None = None):
+    from darts.motion.amass import Motion
+
+    return Motion(body_pose=body_pose, trans=np.zeros((len(body_pose), 3)) if trans is None else trans, fps=fps)
+
+
+def test_a_falling_rate_filters_motion_capture_jitter_and_keeps_smooth_motion():
+    """120 -> 30 fps: white jitter of 0.01 rad on every joint comes out at under half its size
+    (picking every fourth frame would keep all of it), a 1 Hz swing of 0.5 rad within 0.5 % of it."""
+    t = np.arange(481) / 120.0
+    swing = np.zeros((len(t), 21, 3))
+    swing[:, 3, 0] = 0.5 * np.sin(2 * np.pi * t)
+    jitter = np.random.default_rng(0).normal(0.0, 0.01, swing.shape)
+    clean, noisy = resample(_motion_of(swing, 120.0), 30.0), resample(_motion_of(swing + jitter, 120.0), 30.0)
+    picked = (swing + jitter)[::4] - swing[::4]
+    assert np.std(picked) > 0.0095
+    assert np.std(noisy.body_pose - clean.body_pose) < 0.5 * 0.01
+    expected = 0.5 * np.sin(2 * np.pi * np.arange(clean.num_frames) / 30.0)
+    assert np.abs(clean.body_pose[:, 3, 0] - expected).max() < 0.005 * 0.5
+    assert np.allclose(clean.body_pose[0], swing[0]) and np.allclose(clean.body_pose[-1], swing[-1], atol=1e-9)
+
+
+def test_a_rising_rate_interpolates_without_filtering():
+    """30 -> 120 fps: every source frame comes back exactly, the frames between by slerp."""
+    rng = np.random.default_rng(1)
+    pose = rng.normal(0.0, 0.3, (31, 21, 3))
+    fine = resample(_motion_of(pose, 30.0, rng.normal(0.0, 0.1, (31, 3))), 120.0)
+    assert fine.num_frames == 121
+    assert np.allclose(Rotation.from_rotvec(fine.body_pose[::4].reshape(-1, 3)).as_matrix(),
+                       Rotation.from_rotvec(pose.reshape(-1, 3)).as_matrix(), atol=1e-9)
+    halfway = slerp_rotvecs(pose[:1], pose[1:2], np.full((1, 21), 0.5))
+    assert np.allclose(Rotation.from_rotvec(fine.body_pose[2].reshape(-1, 3)).as_matrix(),
+                       Rotation.from_rotvec(halfway.reshape(-1, 3)).as_matrix(), atol=1e-9)
+
+
 def test_classic_smplh_file_at_120_fps_poses_and_resamples_without_nan(body, tmp_path, run_darts):
     """A classic AMASS file: 120.00004577 fps, dmpls, bytes gender, resampled to 30 fps."""
     write_classic_amass_120fps(MOTIONS_DIR / "run.npz", tmp_path / "amass_120.npz")
