@@ -36,19 +36,20 @@ def resample(motion: Motion, fps: float) -> Motion:
     count = np.floor(motion.duration * fps + 1e-3) + 1
     check_frames(count, motion.path, f"the motion resampled to {fps:g} fps")
     count = int(count)
-    src = np.arange(count) * (motion.fps / fps)
+    ratio = motion.fps / fps
+    src = np.arange(count) * ratio
     last = motion.num_frames - 1
     lo = np.minimum(np.floor(src).astype(int), last)
     hi = np.minimum(lo + 1, last)
     frac = src - lo
     fields = {name: slerp_rotvecs(arr[lo], arr[hi], np.broadcast_to(frac[:, None], (count, arr.shape[1])))
               for name, arr in motion.parts().items()}
-    trans = motion.trans[lo] * (1 - frac[:, None]) + motion.trans[hi] * frac[:, None]
-    ratio = motion.fps / fps
     if ratio > 1.0:
         frames, weights = _tent(src, ratio, last)
         fields = {name: _mean_rotations(fields[name], arr[frames], weights) for name, arr in motion.parts().items()}
         trans = np.einsum("ij,ijk->ik", weights, motion.trans[frames])
+    else:
+        trans = motion.trans[lo] * (1 - frac[:, None]) + motion.trans[hi] * frac[:, None]
     return motion.with_frames(trans=trans, fps=float(fps), **fields)
 
 
@@ -57,7 +58,7 @@ def _tent(src: np.ndarray, ratio: float, last: int) -> tuple[np.ndarray, np.ndar
     ``src`` [N]: 1 - |k - s| / w with the half-width w = min(``ratio``, s, ``last`` - s) (0: the
     position alone, whose neighbours' weights are then 0)."""
     reach = int(np.ceil(ratio))
-    frames = np.floor(src).astype(int)[:, None] + np.arange(-reach, reach + 2)[None, :]
+    frames = np.floor(src).astype(int)[:, None] + np.arange(-reach, reach + 1)[None, :]  # column ``reach``: floor(s)
     width = np.minimum(ratio, np.minimum(src, last - src))[:, None]
     distance = np.abs(frames - src[:, None])
     weights = np.where(width > 0, np.maximum(0.0, 1.0 - distance / np.maximum(width, 1e-12)), 0.0)
