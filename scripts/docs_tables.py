@@ -134,6 +134,12 @@ def crdl_comparison() -> list[str]:
     return _script("compare_deformations").markdown(rows).splitlines()
 
 
+def photo_lengths() -> list[str]:
+    """Where the photographs' garments end against the truth on the posed renders
+    (``docs/data/photo_lengths_eval.json``, written by ``python scripts/evaluate_lengths.py``)."""
+    return _script("evaluate_lengths").table(json.loads((DATA / "photo_lengths_eval.json").read_text()))
+
+
 def _reconstruction_tables() -> list[list[str]]:
     """The tables ``python scripts/evaluate_reconstruction.py`` prints from ``docs/data/reconstruction.json``:
     the classifier's accuracy, line Chamfer on test and test_unseen, end to end."""
@@ -536,6 +542,7 @@ TABLES: dict[str, tuple[str, Callable[[], list[str]]]] = {
     "lines-test-unseen": ("docs/reconstruction.md", reconstruction(2)),
     "end-to-end": ("docs/reconstruction.md", reconstruction(3)),
     "posed-lines": ("docs/reconstruction.md", posed_lines),
+    "photo-lengths": ("docs/reconstruction.md", photo_lengths),
     "shipped-weights": ("docs/reconstruction.md", shipped_weights),
     "reconstruct-terms": ("docs/benchmarks.md", reconstruct_terms),
     "solver-defaults": ("docs/benchmarks.md", solver_defaults),
