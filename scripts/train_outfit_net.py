@@ -3,6 +3,7 @@
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 [--epochs 40] [--seed 0]
                                        [--workers 2] [--out darts/photo/weights/outfit_net.pt]
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s101 --evaluate
+    python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 --weights
 
 Data: every picture of a posed dataset (``darts dataset make DIR --count 2400 --seed 100 --posed
 --views 6``: the garment worn and ``meta.json``'s ``other`` garment with it, posed bodies, free
@@ -225,6 +226,30 @@ def evaluate(arrays: dict[str, np.ndarray], pictures: int) -> dict:
     return out
 
 
+#: the rule weights ``--weights`` measures
+SWEPT_WEIGHTS = tuple(round(0.1 * k, 1) for k in range(11))
+
+
+def weight_sweep(arrays: dict[str, np.ndarray], weights=SWEPT_WEIGHTS) -> dict:
+    """Per decision and rule weight w (``darts.photo.attributes.combine``), the share of the
+    validation part's pictures (garments never trained on) with that decision right: how
+    ``RULE_WEIGHTS`` are chosen."""
+    from darts.photo.attributes import geometric_mix
+    from darts.photo.outfit_net import HEADS, probabilities_of, shipped_network
+
+    rows = np.flatnonzero(arrays["val"])
+    network = probabilities_of(shipped_network(), arrays["maps"][rows].astype(np.float32),
+                               arrays["thighs"][rows].astype(np.float32), arrays["scalars"][rows])
+    out = {}
+    for name in HEADS:
+        truth, known = arrays[name][rows], arrays[name][rows] >= 0
+        rules = arrays[f"rules_{name}"][rows]
+        out[name] = {"pictures": int(known.sum()), **{
+            str(w): round(float((geometric_mix(rules, network[name], w).argmax(1) == truth)[known].mean()), 4)
+            for w in weights}}
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, required=True)
@@ -236,6 +261,9 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("darts/photo/weights/outfit_net.pt"))
     parser.add_argument("--evaluate", action="store_true",
                         help="instead of training, measure the shipped network, the rules and both on every picture of --data")
+    parser.add_argument("--weights", action="store_true",
+                        help="instead of training, each decision's accuracy on --data's validation part for rule weights "
+                             "0, 0.1, ..., 1 (how RULE_WEIGHTS are chosen), and --evaluate's measures there")
     args = parser.parse_args()
     import torch
 
@@ -249,6 +277,11 @@ def main() -> None:
         np.savez_compressed(inputs, **arrays)
         print(f"inputs of {len(arrays['maps'])} pictures in {time.process_time() - started:.0f} s", flush=True)
     arrays = dict(np.load(inputs))
+    if args.weights:
+        validation = {k: v[arrays["val"]] for k, v in arrays.items()}
+        print(json.dumps({"data": str(args.data), "validation": weight_sweep(arrays),
+                          "validation_with_rule_weights": evaluate(validation, int(arrays["val"].sum()))}, indent=1))
+        return
     if args.evaluate:
         pictures = len(list((cache / "fits").glob("*.pkl")))
         print(json.dumps({"data": str(args.data), "pictures": pictures, **evaluate(arrays, pictures)}, indent=1))

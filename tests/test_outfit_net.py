@@ -136,3 +136,27 @@ def test_cloth_running_out_of_the_picture_is_at_least_as_long_as_seen():
     inside = within_picture_bounds(decided, SimpleNamespace(top={**top, "sleeve_beyond_picture": False},
                                                             lower={**lower, "hem_beyond_picture": False}, dress=None))
     assert inside == decided
+
+
+def test_the_weight_sweep_scores_the_validation_part_only():
+    """Rules right on every validation picture and wrong on every training one: the rules alone
+    (w = 1) score 1 on each decision, whatever the shipped network says; the training part never counts."""
+    count = 12
+    generator = np.random.default_rng(3)
+    truth = {"one_piece": np.r_[[0, 1] * 6], "sleeves": np.arange(count) % 3,
+             "long": np.where(np.arange(count) % 2 == 0, np.arange(count) // 2 % 2, -1),
+             "skirt": np.where(np.arange(count) % 2 == 0, np.arange(count) // 4 % 2, -1)}
+    val = np.arange(count) < 8
+    arrays = {"maps": generator.random((count, outfit_net.CHANNELS, outfit_net.MAP_SIZE, outfit_net.MAP_SIZE),
+                                       np.float32).astype(np.float16),
+              "thighs": generator.random((count, outfit_net.CHANNELS, outfit_net.THIGH_SIZE, outfit_net.THIGH_SIZE),
+                                         np.float32).astype(np.float16),
+              "scalars": generator.random((count, outfit_net.SCALARS), np.float32), "val": val, **truth}
+    for name, classes in outfit_net.HEADS.items():
+        right = np.eye(len(classes))[np.maximum(truth[name], 0)]
+        arrays[f"rules_{name}"] = np.where(val[:, None], right, np.roll(right, 1, axis=1))
+    sweep = train_outfit_net.weight_sweep(arrays)
+    for name in outfit_net.HEADS:
+        assert sweep[name]["pictures"] == int((truth[name][val] >= 0).sum())
+        assert sweep[name]["1.0"] == 1.0
+        assert set(sweep[name]) == {"pictures", *(str(w) for w in train_outfit_net.SWEPT_WEIGHTS)}
