@@ -1,9 +1,13 @@
 """Train the network that decides a photograph's garments from the parsing (darts.photo.outfit_net).
 
-    python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 [--epochs 40] [--seed 0]
-                                       [--workers 2] [--out darts/photo/weights/outfit_net.pt]
+    python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 [~/.cache/darts/posed-s102x4 ...]
+                                       [--epochs 40] [--seeds 0 1 2] [--width 16] [--workers 2]
+                                       [--out darts/photo/weights/outfit_net.pt]
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s101 --evaluate
-    python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 --weights
+    python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 ~/.cache/darts/posed-s102x4 --weights
+
+Several ``--data`` folders are one dataset: their train parts train, their validation and test
+parts (garments never trained on) validate.
 
 Data: every picture of a posed dataset (``darts dataset make DIR --count 2400 --seed 100 --posed
 --views 6``: the garment worn and ``meta.json``'s ``other`` garment with it, posed bodies, free
@@ -19,9 +23,10 @@ Targets, from the outfit worn: one piece (a dress) or two; the sleeves of the to
 the lower garment long or short, skirt or trousers (a dress has no lower-garment targets).
 Loss: the sum of the heads' cross-entropies over the targets a picture has. Augmentation: the
 mirror image half of the time (both maps). AdamW (lr 2e-3, weight decay 1e-3, cosine to 0), batches of 32;
-the checkpoint kept is the epoch with the best validation score (the share of the validation
-part's garments, both of each picture, whose category is right), and its record holds the
-command, the data, the seed and the numbers.
+each seed's network is kept at its epoch with the best validation score (the share of the
+validation part's garments, both of each picture, whose category is right); the networks of all
+``--seeds`` ship together (``darts.photo.outfit_net.OutfitEnsemble``: their probabilities
+averaged), and the record holds the command, the data, each seed's numbers and the ensemble's.
 """
 from __future__ import annotations
 
@@ -202,16 +207,16 @@ def train(arrays: dict[str, np.ndarray], epochs: int, seed: int, width: int, log
     return network.eval(), best[1], best[2]
 
 
-def evaluate(arrays: dict[str, np.ndarray], pictures: int) -> dict:
-    """The shipped network, the rules and the two combined (``darts.photo.attributes.combine`` with
+def evaluate(arrays: dict[str, np.ndarray], pictures: int, ensemble=None) -> dict:
+    """The shipped network (or ``ensemble``), the rules and the two combined (``darts.photo.attributes.combine`` with
     ``RULE_WEIGHTS``; the picture's bounds on cloth running out of it not applied) on ``arrays``:
     per decision the share right, and the share of ``pictures`` (those without a person count as
     wrong) whose garment of the picture's kind (the first of each outfit) is right."""
     from darts.photo.attributes import RULE_WEIGHTS, geometric_mix
     from darts.photo.outfit_net import HEADS, probabilities_of, shipped_network
 
-    network = probabilities_of(shipped_network(), arrays["maps"].astype(np.float32), arrays["thighs"].astype(np.float32),
-                               arrays["scalars"])
+    network = probabilities_of(ensemble or shipped_network(), arrays["maps"].astype(np.float32),
+                               arrays["thighs"].astype(np.float32), arrays["scalars"])
     rules = {name: arrays[f"rules_{name}"] for name in HEADS}
     combined = {name: geometric_mix(rules[name], network[name], RULE_WEIGHTS[name]) for name in HEADS}
     first_is_lower = np.array([TARGETS[o.split(",")[0]][0] == "lower" for o in arrays["outfits"]])
@@ -230,7 +235,7 @@ def evaluate(arrays: dict[str, np.ndarray], pictures: int) -> dict:
 SWEPT_WEIGHTS = tuple(round(0.1 * k, 1) for k in range(11))
 
 
-def weight_sweep(arrays: dict[str, np.ndarray], weights=SWEPT_WEIGHTS) -> dict:
+def weight_sweep(arrays: dict[str, np.ndarray], weights=SWEPT_WEIGHTS, ensemble=None) -> dict:
     """Per decision and rule weight w (``darts.photo.attributes.combine``), the share of the
     validation part's pictures (garments never trained on) with that decision right: how
     ``RULE_WEIGHTS`` are chosen."""
@@ -238,7 +243,7 @@ def weight_sweep(arrays: dict[str, np.ndarray], weights=SWEPT_WEIGHTS) -> dict:
     from darts.photo.outfit_net import HEADS, probabilities_of, shipped_network
 
     rows = np.flatnonzero(arrays["val"])
-    network = probabilities_of(shipped_network(), arrays["maps"][rows].astype(np.float32),
+    network = probabilities_of(ensemble or shipped_network(), arrays["maps"][rows].astype(np.float32),
                                arrays["thighs"][rows].astype(np.float32), arrays["scalars"][rows])
     out = {}
     for name in HEADS:
@@ -250,15 +255,37 @@ def weight_sweep(arrays: dict[str, np.ndarray], weights=SWEPT_WEIGHTS) -> dict:
     return out
 
 
+def _cache(data: Path) -> Path:
+    return Path.home() / ".cache" / "darts" / "outfit_net" / data.name
+
+
+def load_inputs(datasets: list[Path], workers: int, rebuild: bool) -> dict[str, np.ndarray]:
+    """The inputs of every picture of ``datasets`` (each fitted and built if not cached,
+    ``build_inputs``), one array per key in the order given."""
+    parts = []
+    for data in datasets:
+        cache = _cache(data)
+        fit_all(data, cache / "fits", workers)
+        inputs = cache / "inputs.npz"
+        if rebuild or not inputs.is_file():
+            started = time.process_time()
+            arrays = build_inputs(cache / "fits")
+            np.savez_compressed(inputs, **arrays)
+            print(f"{data}: inputs of {len(arrays['maps'])} pictures in {time.process_time() - started:.0f} s", flush=True)
+        parts.append(dict(np.load(inputs)))
+    return {key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, required=True)
+    parser.add_argument("--data", type=Path, nargs="+", required=True)
     parser.add_argument("--epochs", type=int, default=40)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--width", type=int, default=16)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--rebuild-inputs", action="store_true")
     parser.add_argument("--out", type=Path, default=Path("darts/photo/weights/outfit_net.pt"))
+    parser.add_argument("--network", type=Path, help="--evaluate or --weights this checkpoint, not the shipped one")
     parser.add_argument("--evaluate", action="store_true",
                         help="instead of training, measure the shipped network, the rules and both on every picture of --data")
     parser.add_argument("--weights", action="store_true",
@@ -268,32 +295,38 @@ def main() -> None:
     import torch
 
     torch.set_num_threads(2)
-    cache = Path.home() / ".cache" / "darts" / "outfit_net" / args.data.name
-    fit_all(args.data, cache / "fits", args.workers)
-    inputs = cache / "inputs.npz"
-    if args.rebuild_inputs or not inputs.is_file():
-        started = time.process_time()
-        arrays = build_inputs(cache / "fits")
-        np.savez_compressed(inputs, **arrays)
-        print(f"inputs of {len(arrays['maps'])} pictures in {time.process_time() - started:.0f} s", flush=True)
-    arrays = dict(np.load(inputs))
+    arrays = load_inputs(args.data, args.workers, args.rebuild_inputs)
+    data = " ".join(str(folder) for folder in args.data)
+    from darts.photo.outfit_net import ensemble_of
+
+    chosen = ensemble_of(torch.load(args.network, map_location="cpu", weights_only=True)) if args.network else None
     if args.weights:
         validation = {k: v[arrays["val"]] for k, v in arrays.items()}
-        print(json.dumps({"data": str(args.data), "validation": weight_sweep(arrays),
-                          "validation_with_rule_weights": evaluate(validation, int(arrays["val"].sum()))}, indent=1))
+        print(json.dumps({"data": data, "validation": weight_sweep(arrays, ensemble=chosen),
+                          "validation_with_rule_weights": evaluate(validation, int(arrays["val"].sum()), chosen)}, indent=1))
         return
     if args.evaluate:
-        pictures = len(list((cache / "fits").glob("*.pkl")))
-        print(json.dumps({"data": str(args.data), "pictures": pictures, **evaluate(arrays, pictures)}, indent=1))
+        pictures = sum(len(list((_cache(folder) / "fits").glob("*.pkl"))) for folder in args.data)
+        print(json.dumps({"data": data, "pictures": pictures, **evaluate(arrays, pictures, chosen)}, indent=1))
         return
-    started = time.time()
-    network, epoch, score = train(arrays, args.epochs, args.seed, args.width)
-    record = {"command": " ".join(["python"] + sys.argv), "data": str(args.data), "seed": args.seed,
-              "epochs": args.epochs, "best_epoch": epoch, "validation_garments_right": round(score, 4),
+    from darts.photo.outfit_net import OutfitEnsemble, probabilities_of
+
+    started, members, seeds = time.time(), [], []
+    for seed in args.seeds:
+        network, epoch, score = train(arrays, args.epochs, seed, args.width)
+        members.append(network)
+        seeds.append({"seed": seed, "best_epoch": epoch, "validation_garments_right": round(score, 4)})
+        print(json.dumps(seeds[-1]), flush=True)
+    rows = arrays["val"]
+    ensemble = probabilities_of(OutfitEnsemble(members), arrays["maps"][rows].astype(np.float32),
+                                arrays["thighs"][rows].astype(np.float32), arrays["scalars"][rows])
+    validation = {k: v[rows] for k, v in arrays.items()}
+    record = {"command": " ".join(["python"] + sys.argv), "data": data, "epochs": args.epochs, "width": args.width,
+              "seeds": seeds, "validation_garments_right": round(garment_score(ensemble, validation), 4),
               "train_pictures": int((~arrays["val"]).sum()), "validation_pictures": int(arrays["val"].sum()),
               "minutes": round((time.time() - started) / 60, 1)}
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    torch.save({"state": network.state_dict(), "width": args.width, "record": record}, args.out)
+    torch.save({"width": args.width, "members": [member.state_dict() for member in members], "record": record}, args.out)
     print(json.dumps(record, indent=1))
 
 

@@ -77,6 +77,23 @@ def test_a_picture_and_its_mirror_image_get_the_same_probabilities():
         np.testing.assert_allclose(straight[name], mirrored[name], rtol=1e-5)
 
 
+def test_the_ensemble_answers_its_members_mean_probability():
+    torch.manual_seed(0)
+    members = [outfit_net.OutfitNet(4) for _ in range(3)]
+    generator = np.random.default_rng(3)
+    maps = generator.random((2, outfit_net.CHANNELS, outfit_net.MAP_SIZE, outfit_net.MAP_SIZE), np.float32)
+    thighs = generator.random((2, outfit_net.CHANNELS, outfit_net.THIGH_SIZE, outfit_net.THIGH_SIZE), np.float32)
+    scalars = generator.random((2, outfit_net.SCALARS), np.float32)
+    each = [outfit_net.probabilities_of(member, maps, thighs, scalars) for member in members]
+    together = outfit_net.probabilities_of(outfit_net.OutfitEnsemble(members), maps, thighs, scalars)
+    saved = outfit_net.ensemble_of({"width": 4, "members": [member.state_dict() for member in members]})
+    again = outfit_net.probabilities_of(saved, maps, thighs, scalars)
+    for name in outfit_net.HEADS:
+        assert not np.allclose(each[0][name], each[1][name], atol=1e-3)  # the members differ
+        np.testing.assert_allclose(together[name], np.mean([e[name] for e in each], 0), rtol=1e-5)
+        np.testing.assert_allclose(again[name], together[name], rtol=1e-6)
+
+
 def test_targets_of_an_outfit():
     assert train_outfit_net.targets(["short-skirt", "long-sleeve-top"]) == {"one_piece": 0, "sleeves": 2, "long": 0,
                                                                               "skirt": 1}

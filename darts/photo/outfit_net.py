@@ -26,7 +26,8 @@ Input, all side-agnostic (a picture and its mirror image are the same outfit):
 
 ``OutfitNet``: four stride-2 3 x 3 convolutions (w, 2w, 4w, 4w channels, ReLU) over each map
 (two towers), flattened, joined with the scalars, one hidden layer of 64 (ReLU, dropout), and a
-linear head per decision. Trained on posed renders (``scripts/train_outfit_net.py``, its record in
+linear head per decision. ``OutfitEnsemble``: several such networks, trained alike from different
+seeds, whose probabilities are averaged (what ships: ``scripts/train_outfit_net.py``, its record in
 the weights). ``darts.photo.attributes`` combines its answers with the hand-set rules'.
 """
 from __future__ import annotations
@@ -157,6 +158,21 @@ class OutfitNet(nn.Module):
         return {name: head(h) for name, head in self.heads.items()}
 
 
+class OutfitEnsemble(nn.Module):
+    """Per decision, log((1/K) sum_k softmax(member_k logits)) over its K ``members``: logits whose
+    softmax is the members' mean probability."""
+
+    def __init__(self, members: list[OutfitNet]):
+        super().__init__()
+        self.members = nn.ModuleList(members)
+
+    def forward(self, maps: torch.Tensor, thighs: torch.Tensor, scalars: torch.Tensor) -> dict[str, torch.Tensor]:
+        outputs = [member(maps, thighs, scalars) for member in self.members]
+        count = torch.log(torch.tensor(float(len(outputs))))
+        return {name: torch.logsumexp(torch.stack([torch.log_softmax(out[name], 1) for out in outputs]), 0) - count
+                for name in HEADS}
+
+
 def probabilities_of(network, maps_batch: np.ndarray, thighs_batch: np.ndarray, scalars_batch: np.ndarray
                      ) -> dict[str, np.ndarray]:
     """Per decision [B,classes]: the mean of the softmax of ``network`` on the inputs and on their
@@ -168,13 +184,21 @@ def probabilities_of(network, maps_batch: np.ndarray, thighs_batch: np.ndarray, 
     return {name: ((torch.softmax(straight[name], 1) + torch.softmax(mirrored[name], 1)) / 2).numpy() for name in HEADS}
 
 
+def ensemble_of(checkpoint: dict) -> OutfitEnsemble:
+    """The ``OutfitEnsemble`` saved in ``checkpoint`` ({"width", "members": [state dicts], ...}),
+    in evaluation mode."""
+    members = []
+    for state in checkpoint["members"]:
+        member = OutfitNet(int(checkpoint["width"]))
+        member.load_state_dict(state)
+        members.append(member)
+    return OutfitEnsemble(members).eval()
+
+
 @lru_cache(maxsize=1)
-def shipped_network():
-    """The shipped ``OutfitNet`` with its weights (``WEIGHTS``), in evaluation mode."""
-    checkpoint = torch.load(WEIGHTS, map_location="cpu", weights_only=True)
-    network = OutfitNet(int(checkpoint["width"]))
-    network.load_state_dict(checkpoint["state"])
-    return network.eval()
+def shipped_network() -> OutfitEnsemble:
+    """The shipped ``OutfitEnsemble`` (``WEIGHTS``), in evaluation mode."""
+    return ensemble_of(torch.load(WEIGHTS, map_location="cpu", weights_only=True))
 
 
 def decide(maps_one: np.ndarray, thighs_one: np.ndarray, scalars_one: np.ndarray) -> dict[str, dict[str, float]]:
