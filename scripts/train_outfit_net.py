@@ -1,7 +1,7 @@
 """Train the network that decides a photograph's garments from the parsing (darts.photo.outfit_net).
 
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 [~/.cache/darts/posed-s102x4 ...]
-                                       [--epochs 40] [--seeds 0 1 2] [--width 16] [--workers 2]
+                                       [--epochs 40] [--seeds 0 1 2 3 4 5] [--width 16] [--workers 2]
                                        [--out darts/photo/weights/outfit_net.pt]
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s101 --evaluate
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 ~/.cache/darts/posed-s102x4 --weights
@@ -9,12 +9,13 @@
 Several ``--data`` folders are one dataset: their train parts train, their validation and test
 parts (garments never trained on) validate.
 
-Data: every picture of a posed dataset (``darts dataset make DIR --count 2400 --seed 100 --posed
---views 6``: the garment worn and ``meta.json``'s ``other`` garment with it, posed bodies, free
-cameras, clutter), read as a photograph is: BlazePose's person, the body fitted to it
-(``darts.photo.fit``), the parsing (``darts.photo.parsing``) and its measurements both ways
-(``darts.photo.attributes.measure``), which give the network's inputs. A picture without a person
-is left out. The person and the fit (about 1 s a picture) are cached per picture in
+Data: every picture of the posed datasets (shipped: ``darts dataset make DIR --count 2400 --seed 100
+--posed --views 6`` and ``--count 2400 --seed 102 --posed --views 4``: the garment worn and
+``meta.json``'s ``other`` garment with it, posed bodies, free cameras, clutter), read as a
+photograph is: BlazePose's person, the body fitted to it (``darts.photo.fit``), the parsing
+(``darts.photo.parsing``) and its measurements both ways (``darts.photo.attributes.measure``),
+which give the network's inputs. A picture without a person is left out. The person and the fit
+(about 1 s a picture) are cached per picture in
 ``~/.cache/darts/outfit_net/<dataset>/fits/`` (resumable, ``--workers`` processes of one torch
 thread), the inputs in ``inputs.npz`` beside them (``--rebuild-inputs`` after a change to the
 parsing or the measurements).
@@ -280,7 +281,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, nargs="+", required=True)
     parser.add_argument("--epochs", type=int, default=40)
-    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4, 5])
     parser.add_argument("--width", type=int, default=16)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--rebuild-inputs", action="store_true")
