@@ -301,8 +301,8 @@ def main() -> None:
     from darts.photo.outfit_net import ensemble_of
 
     chosen = ensemble_of(torch.load(args.network, map_location="cpu", weights_only=True)) if args.network else None
+    validation = {k: v[arrays["val"]] for k, v in arrays.items()}
     if args.weights:
-        validation = {k: v[arrays["val"]] for k, v in arrays.items()}
         print(json.dumps({"data": data, "validation": weight_sweep(arrays, ensemble=chosen),
                           "validation_with_rule_weights": evaluate(validation, int(arrays["val"].sum()), chosen)}, indent=1))
         return
@@ -318,10 +318,8 @@ def main() -> None:
         members.append(network)
         seeds.append({"seed": seed, "best_epoch": epoch, "validation_garments_right": round(score, 4)})
         print(json.dumps(seeds[-1]), flush=True)
-    rows = arrays["val"]
-    ensemble = probabilities_of(OutfitEnsemble(members), arrays["maps"][rows].astype(np.float32),
-                                arrays["thighs"][rows].astype(np.float32), arrays["scalars"][rows])
-    validation = {k: v[rows] for k, v in arrays.items()}
+    ensemble = probabilities_of(OutfitEnsemble(members), validation["maps"].astype(np.float32),
+                                validation["thighs"].astype(np.float32), validation["scalars"])
     record = {"command": " ".join(["python"] + sys.argv), "data": data, "epochs": args.epochs, "width": args.width,
               "seeds": seeds, "validation_garments_right": round(garment_score(ensemble, validation), 4),
               "train_pictures": int((~arrays["val"]).sum()), "validation_pictures": int(arrays["val"].sum()),
