@@ -1,7 +1,7 @@
 """Train the network that decides a photograph's garments from the parsing (darts.photo.outfit_net).
 
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 [~/.cache/darts/posed-s102x4 ...]
-                                       [--epochs 40] [--seeds 0 1 2 3 4 5] [--width 16] [--workers 2]
+                                       [--epochs 40] [--seeds 0 1 2 3 4 5] [--width 16] [--workers 2] [--misalign 0]
                                        [--out darts/photo/weights/outfit_net.pt]
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s101 --evaluate
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 ~/.cache/darts/posed-s102x4 --weights
@@ -23,7 +23,12 @@ parsing or the measurements).
 Targets, from the outfit worn: one piece (a dress) or two; the sleeves of the top or the dress;
 the lower garment long or short, skirt or trousers (a dress has no lower-garment targets).
 Loss: the sum of the heads' cross-entropies over the targets a picture has. Augmentation: the
-mirror image half of the time (both maps). AdamW (lr 2e-3, weight decay 1e-3, cosine to 0), batches of 32;
+mirror image half of the time (both maps); with ``--misalign P`` also each picture's parsing shifted
+by up to P map pixels against the fitted body's zones (``misalign``: a body fit a little off the
+person, as on real photographs; not in the shipped network's recipe yet: on the three datasets
+s100x6, s102x4 and s103x4 with P = 2 five of six seeds' validation scores rose 0.7-1.7 points (one
+fell 0.1), the six seeds' 89.5 -> 90.4 %, but the held-out renders and the development photographs did not follow,
+``docs/reconstruction.md``). AdamW (lr 2e-3, weight decay 1e-3, cosine to 0), batches of 32;
 each seed's network is kept at its epoch with the best validation score (the share of the
 validation part's garments, both of each picture, whose category is right); the networks of all
 ``--seeds`` ship together (``darts.photo.outfit_net.OutfitEnsemble``: their probabilities
@@ -163,7 +168,23 @@ def garment_score(probabilities: dict[str, np.ndarray], arrays: dict[str, np.nda
     return float(np.where(garments == 1, right[:, 0], right.sum(1)).sum() / garments.sum())
 
 
-def train(arrays: dict[str, np.ndarray], epochs: int, seed: int, width: int, log=print):
+def misalign(batch, pixels: int, generator: np.random.Generator):
+    """``batch`` [B,CHANNELS,S,S] with each picture's parsing channels (the first ``len(LABELS)``)
+    shifted by its own whole-pixel offset (dx, dy), each uniform in [-pixels, pixels], against the
+    body's zones: a body fit that sits a little off the person, as on real photographs."""
+    import torch
+
+    from darts.photo.outfit_net import LABELS
+
+    if pixels <= 0:
+        return batch
+    out = batch.clone()
+    for k, (dy, dx) in enumerate(generator.integers(-pixels, pixels + 1, (len(batch), 2))):
+        out[k, :len(LABELS)] = torch.roll(batch[k, :len(LABELS)], (int(dy), int(dx)), (1, 2))
+    return out
+
+
+def train(arrays: dict[str, np.ndarray], epochs: int, seed: int, width: int, misalign_pixels: int = 0, log=print):
     """(the best network by validation score, its epoch, the score) trained on ``arrays``."""
     import copy
 
@@ -189,7 +210,8 @@ def train(arrays: dict[str, np.ndarray], epochs: int, seed: int, width: int, log
         for start in range(0, len(order), 32):
             rows = torch.tensor(order[start:start + 32])
             mirror = (torch.rand(len(rows)) < 0.5)[:, None, None, None]
-            batch, thigh_batch = maps[rows], thighs[rows]
+            batch = misalign(maps[rows], misalign_pixels, generator)
+            thigh_batch = misalign(thighs[rows], misalign_pixels, generator)
             out = network(torch.where(mirror, batch.flip(3), batch), torch.where(mirror, thigh_batch.flip(3), thigh_batch),
                           scalars[rows])
             loss = sum(torch.nn.functional.cross_entropy(out[name][truth[name][rows] >= 0],
@@ -284,6 +306,8 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4, 5])
     parser.add_argument("--width", type=int, default=16)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--misalign", type=int, default=0, metavar="PIXELS",
+                        help="shift each training picture's parsing against the body's zones by up to PIXELS (map pixels)")
     parser.add_argument("--rebuild-inputs", action="store_true")
     parser.add_argument("--out", type=Path, default=Path("darts/photo/weights/outfit_net.pt"))
     parser.add_argument("--network", type=Path, help="--evaluate or --weights this checkpoint, not the shipped one")
@@ -314,13 +338,14 @@ def main() -> None:
 
     started, members, seeds = time.time(), [], []
     for seed in args.seeds:
-        network, epoch, score = train(arrays, args.epochs, seed, args.width)
+        network, epoch, score = train(arrays, args.epochs, seed, args.width, args.misalign)
         members.append(network)
         seeds.append({"seed": seed, "best_epoch": epoch, "validation_garments_right": round(score, 4)})
         print(json.dumps(seeds[-1]), flush=True)
     ensemble = probabilities_of(OutfitEnsemble(members), validation["maps"].astype(np.float32),
                                 validation["thighs"].astype(np.float32), validation["scalars"])
     record = {"command": " ".join(["python"] + sys.argv), "data": data, "epochs": args.epochs, "width": args.width,
+              "misalign": args.misalign,
               "seeds": seeds, "validation_garments_right": round(garment_score(ensemble, validation), 4),
               "train_pictures": int((~arrays["val"]).sum()), "validation_pictures": int(arrays["val"].sum()),
               "minutes": round((time.time() - started) / 60, 1)}

@@ -155,3 +155,56 @@ def test_garments_draped_together_as_worlds_come_out_as_draped_alone(tmp_path):
         assert a["drape_penetration"] == pytest.approx(b["drape_penetration"], abs=0.002)
         draped = [read_npz(tmp_path / where / job.path / "draped.npz")["vertices"] for where in ("together", "alone")]
         assert np.linalg.norm(draped[0] - draped[1], axis=1).mean() < 1e-3
+
+
+def _joint(body, name: str) -> np.ndarray:
+    joints = np.asarray(body.J_regressor) @ np.asarray(body.v_template)
+    return joints[list(body.joint_names).index(name)]
+
+
+@pytest.mark.parametrize("category", ["long-sleeve-top", "short-sleeve-top", "long-pants", "short-pants",
+                                      "long-skirt", "short-skirt"])
+def test_recipe_two_runs_lengths_up_to_the_elbow_and_the_knee_without_crossing(category, body):
+    """Recipe 2's length edits at both ends of their range (the CRDL's target lines on the default
+    body's template): a long sleeve's cuff ends 0-4 cm below the elbow at its shortest, a short
+    one's 0-4 cm above it at its longest; the legs' hems the same about the knee (long pants: 10-16
+    cm below it). Recipe 1 draws the same garments, only its ranges narrower."""
+    from darts.crdl.deform import weld_garment
+    from darts.crdl.targets import edit_targets
+    from darts.dart.build import make_dart
+    from darts.templates.defaults import DATASET_EASE, DATASET_EDGE_LENGTH
+    from sim.dataset.recipe import RECIPES
+
+    welded = weld_garment(make_dart(category, body, edge_length=DATASET_EDGE_LENGTH, ease=DATASET_EASE))
+    sleeve = "sleeve" in category
+    edit = "sleeve" if sleeve else "hem"
+    low, high = RECIPES[2][category][edit]
+    shortest = edit_targets(category, welded.vertices, welded.lines, [(edit, low if category.startswith("long") else high)])
+    line = ("left_cuff" if sleeve else "left_hem" if "pants" in category else "hem")
+    end = shortest[line].mean(0)
+    if sleeve:
+        shoulder, elbow, wrist = (_joint(body, f"left_{j}") for j in ("shoulder", "elbow", "wrist"))
+        axis = (wrist - shoulder) / np.linalg.norm(wrist - shoulder)
+        beyond = float(np.dot(end - elbow, axis))  # > 0: towards the wrist
+    else:
+        beyond = float(_joint(body, "left_knee")[1] - end[1])  # > 0: below the knee
+    long = category.startswith("long")
+    expected = {"long-pants": (0.10, 0.16)}.get(category, (0.0, 0.04) if long else (-0.04, 0.0))
+    assert expected[0] < beyond < expected[1], beyond
+    kept = 1 if long else 0  # the end away from the boundary is recipe 1's
+    assert RECIPES[1][category][edit][kept] == (low, high)[kept]
+    one, two = garment_recipe(0, 3, recipe=1), garment_recipe(0, 3, recipe=2)
+    assert (one.category, one.split, one.betas) == (two.category, two.split, two.betas) and one == garment_recipe(0, 3)
+
+
+def test_finishing_a_dataset_with_another_seed_or_recipe_is_refused(tmp_path, run_darts):
+    """A dataset made with --seed 5 (recipe 1) is not finished with --recipe 2 or --seed 6: one line,
+    exit 2, its manifest as it was."""
+    manifest = tmp_path / "out" / "garments" / "manifest.jsonl"
+    manifest.parent.mkdir(parents=True)
+    manifest.write_text(json.dumps({"id": "g00000", "seed": 5, "index": 0, "status": "ok"}) + "\n")
+    before = manifest.read_text()
+    for args in (["--seed", "5", "--recipe", "2"], ["--seed", "6"]):
+        code, out, err = run_darts("dataset", "make", tmp_path / "out", "--count", "2", *args)
+        assert code == 2 and len(err.strip().splitlines()) == 1 and "was made with --seed 5 --recipe 1" in err, err
+    assert manifest.read_text() == before and sorted(p.name for p in (tmp_path / "out").iterdir()) == ["garments"]

@@ -177,3 +177,23 @@ def test_the_weight_sweep_scores_the_validation_part_only():
         assert sweep[name]["pictures"] == int((truth[name][val] >= 0).sum())
         assert sweep[name]["1.0"] == 1.0
         assert set(sweep[name]) == {"pictures", *(str(w) for w in train_outfit_net.SWEPT_WEIGHTS)}
+
+
+def test_misalign_shifts_the_parsing_against_the_body_zones_and_nothing_else():
+    """The training augmentation: each picture's label channels move by one whole-pixel offset of
+    at most the given size; the body's zones and the crop's outside stay where they were."""
+    generator = np.random.default_rng(3)
+    batch = torch.zeros(8, outfit_net.CHANNELS, 16, 16)
+    batch[:, :, 6:10, 6:10] = 1.0  # a square in every channel
+    moved = train_outfit_net.misalign(batch, 2, generator)
+    labels = len(outfit_net.LABELS)
+    assert torch.equal(moved[:, labels:], batch[:, labels:])
+    offsets = set()
+    for picture in moved:
+        rows, columns = np.nonzero(picture[0].numpy())
+        dy, dx = int(rows.min()) - 6, int(columns.min()) - 6
+        assert max(abs(dy), abs(dx)) <= 2 and picture[0].sum() == 16
+        assert all(torch.equal(picture[k], picture[0]) for k in range(labels))  # one offset for all labels
+        offsets.add((dy, dx))
+    assert len(offsets) > 1
+    assert train_outfit_net.misalign(batch, 0, generator) is batch

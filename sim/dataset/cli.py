@@ -16,15 +16,30 @@ import numpy as np
 
 from darts.errors import DartsInputError
 from darts.fileio import atomic_path
-from darts.jobs import MANIFEST, Job, check_cluster_options, check_out_dir, ray_session, run_jobs
+from darts.jobs import MANIFEST, Job, check_cluster_options, check_out_dir, ray_session, read_manifest, run_jobs
+from sim.dataset.recipe import DEFAULT_RECIPE, RECIPES
 
 SUMMARY = "summary.json"
 
 
-def garment_jobs(count: int, views: int, seed: int, categories: list[str]) -> list[Job]:
+def garment_jobs(count: int, views: int, seed: int, categories: list[str], recipe: int = 1) -> list[Job]:
     """One job per garment: enough garments for ``count`` samples at ``views`` pictures each."""
-    return [Job(f"g{index:05d}", {"seed": seed, "index": index, "categories": categories})
+    return [Job(f"g{index:05d}", {"seed": seed, "index": index, "categories": categories, "recipe": recipe})
             for index in range(math.ceil(count / views))]
+
+
+def check_same_dataset(out: Path, seed: int, recipe: int) -> None:
+    """A dataset being finished keeps its seed and recipe: else one line, exit 2."""
+    from sim.dataset.make import GARMENTS
+
+    manifest = out / GARMENTS / MANIFEST
+    if not manifest.is_file():
+        return
+    for row in read_manifest(manifest).values():
+        made = (row.get("seed"), row.get("recipe", 1))
+        if made != (seed, recipe):
+            raise DartsInputError(out, f"was made with --seed {made[0]} --recipe {made[1]}, not --seed {seed} "
+                                       f"--recipe {recipe}: finish it with those, or choose another OUT_DIR")
 
 
 def sample_jobs(garment_rows: list[dict], views: int, unseen: bool = True) -> list[Job]:
@@ -70,7 +85,7 @@ def summarise(garments: list[dict], samples: list[dict], args) -> dict:
     return {
         "command": f"darts dataset make OUT_DIR --count {args.count} --seed {args.seed} --views {args.views}"
                    + (f" --categories {' '.join(args.categories)}" if args.categories else "")
-                   + (" --posed" if args.posed else ""),
+                   + (" --posed" if args.posed else "") + (f" --recipe {args.recipe}" if args.recipe != 1 else ""),
         "garments": len(ok_garments), "samples": len(ok_samples),
         "garments_dropped": {r["id"]: r["error"] for r in garments if r["status"] == "unstable"},
         "garments_failed": {r["id"]: r["error"] for r in garments if r["status"] == "failed"},
@@ -113,11 +128,12 @@ def make(args) -> int:
         check_device(args.device)
     out = Path(args.output)
     check_out_dir(out)
+    check_same_dataset(out, args.seed, args.recipe)
     categories = list(dict.fromkeys(args.categories)) if args.categories else list(CATEGORIES)
     with ray_session(args.address, args.workers) as session:
         options = dict(workers=args.workers, retry=args.retry, session=session)
         one, group = (make_posed_garment, make_posed_garments) if args.posed else (make_garment, make_garments)
-        garments = run_jobs(garment_jobs(args.count, args.views, args.seed, categories), out / GARMENTS,
+        garments = run_jobs(garment_jobs(args.count, args.views, args.seed, categories, args.recipe), out / GARMENTS,
                             partial(one, device=args.device), description="garments",
                             group=partial(group, device=args.device) if args.worlds > 1 else None,
                             group_size=args.worlds, **options)
@@ -152,6 +168,9 @@ def add_parser(groups) -> None:
                              "rendered in test_unseen)")
     parser.add_argument("--seed", type=int, default=0, help="dataset seed (default 0)")
     parser.add_argument("--views", type=int, default=2, metavar="V", help="pictures per garment (default 2)")
+    parser.add_argument("--recipe", type=int, choices=sorted(RECIPES), default=DEFAULT_RECIPE,
+                        help="the edit ranges' version (docs/dataset.md; 2: sleeve and leg lengths up to the elbow and "
+                             "the knee; default 1)")
     parser.add_argument("--categories", nargs="+", metavar="C", help="only these categories (default: all ten)")
     parser.add_argument("--posed", action="store_true",
                         help="the posed dataset: each garment simulated on a shipped motion up to a random frame, with "

@@ -57,7 +57,8 @@ def make_garments(jobs: list[Job], folders: list[Path], device: str = "cpu") -> 
     from sim.dataset.drape import drape_many
 
     body = _body()
-    recipes = [garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"])) for job in jobs]
+    recipes = [garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]),
+                           job.inputs.get("recipe", 1)) for job in jobs]
     built = [recipe_garment(recipe, body) for recipe in recipes]
     drapes = drape_many([(dart, body, CATEGORIES[recipe.category].family) for recipe, (dart, _, _) in zip(recipes, built)],
                         DRAPE_SECONDS, device=device)

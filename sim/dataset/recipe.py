@@ -9,12 +9,24 @@ never depends on which other samples are made, in what order, or on which machin
   appearance never used in training (``test_unseen``, ``sim.dataset.appearance``).
 - **Body shape**: the first ``SHAPE_COUNT`` betas of the bundled body, each N(0, 1) (its PCA is
   scaled so) truncated to +-2; the others 0.
-- **Edits** (``EDIT_RANGES``, metres, uniform in each range; hem / sleeve: > 0 lengthens, the
+- **Edits** (``RECIPES[recipe]``, metres, uniform in each range; hem / sleeve: > 0 lengthens, the
   others widen): every edit of the category, so no two garments share their feature lines. The
   ranges keep categories apart (a lengthened short sleeve stops above the elbow, a shortened long
-  sleeve below it; a short skirt stays above the knee, a long one below it). Waists of skirts and
-  pants are not widened: a waistband 1.5 cm wider than the body slid 36 cm down the hips in the
-  drape (measured), where a real one is elastic.
+  sleeve below it; short pants and skirts stay above the knee, long ones below it). Waists of
+  skirts and pants are not widened: a waistband 1.5 cm wider than the body slid 36 cm down the hips
+  in the drape (measured), where a real one is elastic. Two versions (``--recipe``), measured on the
+  default body (upper arm 27.5 cm, forearm 24.4 cm; the long sleeve's cuff 2 cm above the wrist,
+  the short one's 15 cm below the shoulder; the knee 32.5 cm below the hip):
+
+  - **1** (``EDIT_RANGES``, the default; what the shipped networks were trained on): a long sleeve
+    ends 12.5 cm below the elbow or lower, a short one 7 cm above it or higher; short pants and
+    skirts end 10 cm above the knee or higher, long skirts 8 cm below it and long pants 29 cm
+    below it or lower: nothing is pictured near the boundaries, which real clothes reach (a
+    sleeve rolled to the forearm, bermudas, capris, a knee-length skirt);
+  - **2**: the lengths run up to the boundaries: a long sleeve down to 2.5 cm below the elbow
+    (sleeve -0.20 m), a short one up to 2 cm above it (+0.13 m); short pants up to 3 cm above the
+    knee (hem +0.17 m), short skirts 2.5 cm (+0.16 m); long skirts up to 2 cm below it (-0.16 m),
+    long pants 14 cm (-0.25 m). Every other range as in 1.
 """
 from __future__ import annotations
 
@@ -36,6 +48,7 @@ _DRESS = {"hem": (-0.12, 0.15), "neckline": (0.0, 0.05), "hem_width": (0.0, 0.15
 _LONG_SLEEVE = {"sleeve": (-0.10, 0.0), "cuff_width": (0.0, 0.03)}
 _SHORT_SLEEVE = {"sleeve": (-0.04, 0.08), "cuff_width": (0.0, 0.03)}
 _ARMHOLE = {"cuff_width": (0.0, 0.02)}
+#: recipe 1's edit ranges (module docstring)
 EDIT_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     "long-sleeve-top": {**_TOP, **_LONG_SLEEVE},
     "short-sleeve-top": {**_TOP, **_SHORT_SLEEVE},
@@ -48,6 +61,17 @@ EDIT_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     "long-skirt": {"hem": (-0.10, 0.12), "hem_width": (0.0, 0.18)},
     "short-skirt": {"hem": (-0.05, 0.08), "hem_width": (0.0, 0.12)},
 }
+#: recipe 2's changes to recipe 1: lengths up to the elbow and the knee (module docstring)
+_TO_THE_JOINTS = {"long-sleeve-top": {"sleeve": (-0.20, 0.0)}, "long-sleeve-dress": {"sleeve": (-0.20, 0.0)},
+                  "short-sleeve-top": {"sleeve": (-0.04, 0.13)}, "short-sleeve-dress": {"sleeve": (-0.04, 0.13)},
+                  "long-pants": {"hem": (-0.25, 0.02)}, "short-pants": {"hem": (-0.06, 0.17)},
+                  "long-skirt": {"hem": (-0.16, 0.12)}, "short-skirt": {"hem": (-0.05, 0.16)}}
+#: the edit ranges of each recipe version (``--recipe``)
+RECIPES: dict[int, dict[str, dict[str, tuple[float, float]]]] = {
+    1: EDIT_RANGES,
+    2: {category: {**ranges, **_TO_THE_JOINTS.get(category, {})} for category, ranges in EDIT_RANGES.items()},
+}
+DEFAULT_RECIPE = 1
 _CATEGORY, _SPLIT, _SHAPE, _EDITS, _LOOK = range(5)
 
 
@@ -64,6 +88,7 @@ class GarmentRecipe:
     split: str  # train, val or test (a test garment also makes the test_unseen samples)
     betas: tuple[float, ...]
     edits: tuple[tuple[str, float], ...]
+    recipe: int = DEFAULT_RECIPE
 
     @property
     def id(self) -> str:
@@ -71,11 +96,13 @@ class GarmentRecipe:
 
     def as_dict(self) -> dict:
         return {"seed": self.seed, "index": self.index, "id": self.id, "category": self.category, "split": self.split,
-                "betas": list(self.betas), "edits": dict(self.edits)}
+                "betas": list(self.betas), "edits": dict(self.edits), "recipe": self.recipe}
 
 
-def garment_recipe(seed: int, index: int, categories: tuple[str, ...] = tuple(CATEGORIES)) -> GarmentRecipe:
-    """Garment ``index`` of the dataset with ``seed`` (module docstring)."""
+def garment_recipe(seed: int, index: int, categories: tuple[str, ...] = tuple(CATEGORIES),
+                   recipe: int = DEFAULT_RECIPE) -> GarmentRecipe:
+    """Garment ``index`` of the dataset with ``seed`` and edit ranges ``RECIPES[recipe]`` (module
+    docstring); the versions draw the same numbers, so only the edits' values differ."""
     block, slot = divmod(index, len(categories))
     category = categories[int(generator(seed, block, _CATEGORY).permutation(len(categories))[slot])]
     u = generator(seed, index, _SPLIT).uniform()
@@ -83,8 +110,8 @@ def garment_recipe(seed: int, index: int, categories: tuple[str, ...] = tuple(CA
     rng = generator(seed, index, _SHAPE)
     betas = np.clip(rng.normal(0.0, 1.0, SHAPE_COUNT), -SHAPE_LIMIT, SHAPE_LIMIT)
     rng = generator(seed, index, _EDITS)
-    edits = tuple((name, round(float(rng.uniform(low, high)), 4)) for name, (low, high) in EDIT_RANGES[category].items())
-    return GarmentRecipe(seed, index, category, split, tuple(round(float(b), 4) for b in betas), edits)
+    edits = tuple((name, round(float(rng.uniform(low, high)), 4)) for name, (low, high) in RECIPES[recipe][category].items())
+    return GarmentRecipe(seed, index, category, split, tuple(round(float(b), 4) for b in betas), edits, recipe)
 
 
 def recipe_garment(recipe: GarmentRecipe, body, template=None) -> tuple:
