@@ -22,7 +22,7 @@ from sim.dataset.recipe import DEFAULT_RECIPE, RECIPES
 SUMMARY = "summary.json"
 
 
-def garment_jobs(count: int, views: int, seed: int, categories: list[str], recipe: int = 1) -> list[Job]:
+def garment_jobs(count: int, views: int, seed: int, categories: list[str], recipe: int = DEFAULT_RECIPE) -> list[Job]:
     """One job per garment: enough garments for ``count`` samples at ``views`` pictures each."""
     return [Job(f"g{index:05d}", {"seed": seed, "index": index, "categories": categories, "recipe": recipe})
             for index in range(math.ceil(count / views))]
@@ -36,7 +36,7 @@ def check_same_dataset(out: Path, seed: int, recipe: int) -> None:
     if not manifest.is_file():
         return
     for row in read_manifest(manifest).values():
-        made = (row.get("seed"), row.get("recipe", 1))
+        made = (row.get("seed"), row.get("recipe", 1))  # rows from before the versions are recipe 1
         if made != (seed, recipe):
             raise DartsInputError(out, f"was made with --seed {made[0]} --recipe {made[1]}, not --seed {seed} "
                                        f"--recipe {recipe}: finish it with those, or choose another OUT_DIR")
