@@ -32,10 +32,7 @@ def check_same_dataset(out: Path, seed: int, recipe: int) -> None:
     """A dataset being finished keeps its seed and recipe: else one line, exit 2."""
     from sim.dataset.make import GARMENTS
 
-    manifest = out / GARMENTS / MANIFEST
-    if not manifest.is_file():
-        return
-    for row in read_manifest(manifest).values():
+    for row in read_manifest(out / GARMENTS / MANIFEST).values():  # none before it is begun
         made = (row.get("seed"), row.get("recipe", 1))  # rows from before the versions are recipe 1
         if made != (seed, recipe):
             raise DartsInputError(out, f"was made with --seed {made[0]} --recipe {made[1]}, not --seed {seed} "
@@ -85,7 +82,7 @@ def summarise(garments: list[dict], samples: list[dict], args) -> dict:
     return {
         "command": f"darts dataset make OUT_DIR --count {args.count} --seed {args.seed} --views {args.views}"
                    + (f" --categories {' '.join(args.categories)}" if args.categories else "")
-                   + (" --posed" if args.posed else "") + (f" --recipe {args.recipe}" if args.recipe != 1 else ""),
+                   + (" --posed" if args.posed else "") + (f" --recipe {args.recipe}" if args.recipe != DEFAULT_RECIPE else ""),
         "garments": len(ok_garments), "samples": len(ok_samples),
         "garments_dropped": {r["id"]: r["error"] for r in garments if r["status"] == "unstable"},
         "garments_failed": {r["id"]: r["error"] for r in garments if r["status"] == "failed"},

@@ -58,7 +58,7 @@ def make_garments(jobs: list[Job], folders: list[Path], device: str = "cpu") -> 
 
     body = _body()
     recipes = [garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]),
-                                    job.inputs["recipe"]) for job in jobs]
+                              job.inputs["recipe"]) for job in jobs]
     built = [recipe_garment(recipe, body) for recipe in recipes]
     drapes = drape_many([(dart, body, CATEGORIES[recipe.category].family) for recipe, (dart, _, _) in zip(recipes, built)],
                         DRAPE_SECONDS, device=device)

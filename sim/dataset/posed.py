@@ -100,7 +100,7 @@ def make_posed_garments(jobs: list[Job], folders: list[Path], device: str = "cpu
     made, worlds = [], []
     for job in jobs:
         recipe = garment_recipe(job.inputs["seed"], job.inputs["index"], tuple(job.inputs["categories"]),
-                                    job.inputs["recipe"])
+                              job.inputs["recipe"])
         family = CATEGORIES[recipe.category].family
         posed = posed_recipe(recipe.seed, recipe.index, family)
         started = time.perf_counter()
