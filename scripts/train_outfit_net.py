@@ -2,6 +2,7 @@
 
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 [~/.cache/darts/posed-s102x4 ...]
                                        [--epochs 40] [--seeds 0 1 2 3 4 5] [--width 16] [--workers 2] [--misalign 0]
+                                       [--within-recipe R]
                                        [--out darts/photo/weights/outfit_net.pt]
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s101 --evaluate
     python scripts/train_outfit_net.py --data ~/.cache/darts/posed-s100x6 ~/.cache/darts/posed-s102x4 --weights
@@ -282,9 +283,22 @@ def _cache(data: Path) -> Path:
     return Path.home() / ".cache" / "darts" / "outfit_net" / data.name
 
 
-def load_inputs(datasets: list[Path], workers: int, rebuild: bool) -> dict[str, np.ndarray]:
+def within(data: Path, samples: np.ndarray, recipe: int) -> np.ndarray:
+    """[N] bool: which ``samples`` (``<split>__<picture>`` of dataset ``data``) show a garment that
+    ``RECIPES[recipe]`` could draw (``sim.dataset.recipe.within_recipe``, on its ``meta.json``)."""
+    from sim.dataset.recipe import within_recipe
+
+    def drawn(sample: str) -> bool:
+        meta = json.loads((data / sample.replace("__", "/", 1) / "meta.json").read_text())
+        return within_recipe(meta["category"], meta["edits"], recipe)
+
+    return np.array([drawn(str(sample)) for sample in samples], dtype=bool)
+
+
+def load_inputs(datasets: list[Path], workers: int, rebuild: bool, recipe: int | None = None) -> dict[str, np.ndarray]:
     """The inputs of every picture of ``datasets`` (each fitted and built if not cached,
-    ``build_inputs``), one array per key in the order given."""
+    ``build_inputs``), one array per key in the order given; with ``recipe``, only the pictures
+    whose garment that recipe could draw (``within``)."""
     parts = []
     for data in datasets:
         cache = _cache(data)
@@ -295,7 +309,12 @@ def load_inputs(datasets: list[Path], workers: int, rebuild: bool) -> dict[str, 
             arrays = build_inputs(cache / "fits")
             np.savez_compressed(inputs, **arrays)
             print(f"{data}: inputs of {len(arrays['maps'])} pictures in {time.process_time() - started:.0f} s", flush=True)
-        parts.append(dict(np.load(inputs)))
+        part = dict(np.load(inputs))
+        if recipe is not None:
+            kept = within(data, part["samples"], recipe)
+            print(f"{data}: {kept.sum()} of {len(kept)} pictures within recipe {recipe}", flush=True)
+            part = {key: value[kept] for key, value in part.items()}
+        parts.append(part)
     return {key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
 
 
@@ -308,6 +327,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--misalign", type=int, default=0, metavar="PIXELS",
                         help="shift each training picture's parsing against the body's zones by up to PIXELS (map pixels)")
+    parser.add_argument("--within-recipe", type=int, metavar="R",
+                        help="only the pictures whose garment dataset recipe R could draw (a narrower recipe than --data's)")
     parser.add_argument("--rebuild-inputs", action="store_true")
     parser.add_argument("--out", type=Path, default=Path("darts/photo/weights/outfit_net.pt"))
     parser.add_argument("--network", type=Path, help="--evaluate or --weights this checkpoint, not the shipped one")
@@ -320,7 +341,7 @@ def main() -> None:
     import torch
 
     torch.set_num_threads(2)
-    arrays = load_inputs(args.data, args.workers, args.rebuild_inputs)
+    arrays = load_inputs(args.data, args.workers, args.rebuild_inputs, args.within_recipe)
     data = " ".join(str(folder) for folder in args.data)
     from darts.photo.outfit_net import ensemble_of
 
@@ -345,7 +366,7 @@ def main() -> None:
     ensemble = probabilities_of(OutfitEnsemble(members), validation["maps"].astype(np.float32),
                                 validation["thighs"].astype(np.float32), validation["scalars"])
     record = {"command": " ".join(["python"] + sys.argv), "data": data, "epochs": args.epochs, "width": args.width,
-              "misalign": args.misalign,
+              "misalign": args.misalign, "within_recipe": args.within_recipe,
               "seeds": seeds, "validation_garments_right": round(garment_score(ensemble, validation), 4),
               "train_pictures": int((~arrays["val"]).sum()), "validation_pictures": int(arrays["val"].sum()),
               "minutes": round((time.time() - started) / 60, 1)}

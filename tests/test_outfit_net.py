@@ -197,3 +197,34 @@ def test_misalign_shifts_the_parsing_against_the_body_zones_and_nothing_else():
         offsets.add((dy, dx))
     assert len(offsets) > 1
     assert train_outfit_net.misalign(batch, 0, generator) is batch
+
+
+def test_within_recipe_keeps_the_pictures_a_narrower_recipe_could_draw(tmp_path):
+    """Recipe 3 is recipe 2 with recipe 1's short sleeves: a short sleeve lengthened by 0.10 m (2
+    drew it, 3 cannot) is left out, a long sleeve shortened by 0.15 m (2 and 3) and recipe 1's
+    garments stay; a garment missing an edit of its category is never a recipe's."""
+    import json
+
+    from sim.dataset.recipe import RECIPES, within_recipe
+
+    for category, ranges in RECIPES[3].items():
+        short_sleeve = {"sleeve": RECIPES[1][category]["sleeve"]} if category.startswith("short-sleeve") else {}
+        assert ranges == RECIPES[2][category] | short_sleeve
+        assert RECIPES[2][category] != RECIPES[1][category] or "sleeveless" in category
+    garments = {"train/g00000-0": ("short-sleeve-top", {"sleeve": 0.10}),
+                "train/g00001-0": ("long-sleeve-dress", {"sleeve": -0.15}),
+                "val/g00002-1": ("short-sleeve-top", {"sleeve": 0.05}),
+                "val/g00003-0": ("long-pants", {"hem": -0.05}),
+                "val/g00004-0": ("long-pants", {"hem": -0.05})}
+    for folder, (category, edits) in garments.items():
+        full = {name: low for name, (low, _) in RECIPES[1][category].items()} | edits
+        if folder.endswith("4-0"):
+            full.pop("hem_width")
+        (tmp_path / folder).mkdir(parents=True)
+        (tmp_path / folder / "meta.json").write_text(json.dumps({"category": category, "edits": full}))
+    samples = np.array([folder.replace("/", "__") for folder in garments])
+    assert train_outfit_net.within(tmp_path, samples, 3).tolist() == [False, True, True, True, False]
+    assert train_outfit_net.within(tmp_path, samples, 2).tolist() == [True, True, True, True, False]
+    assert train_outfit_net.within(tmp_path, samples, 1).tolist() == [False, False, True, True, False]
+    at_the_ends = {name: high for name, (_, high) in RECIPES[3]["short-sleeve-top"].items()}
+    assert at_the_ends["sleeve"] == 0.08 and within_recipe("short-sleeve-top", at_the_ends, 3)

@@ -14,7 +14,7 @@ never depends on which other samples are made, in what order, or on which machin
   ranges keep categories apart (a lengthened short sleeve stops above the elbow, a shortened long
   sleeve below it; short pants and skirts stay above the knee, long ones below it). Waists of
   skirts and pants are not widened: a waistband 1.5 cm wider than the body slid 36 cm down the hips
-  in the drape (measured), where a real one is elastic. Two versions (``--recipe``), measured on the
+  in the drape (measured), where a real one is elastic. Three versions (``--recipe``), measured on the
   default body (upper arm 27.5 cm, forearm 24.4 cm; the long sleeve's cuff 2 cm above the wrist,
   the short one's 15 cm below the shoulder; the knee 32.5 cm below the hip):
 
@@ -27,6 +27,11 @@ never depends on which other samples are made, in what order, or on which machin
     (sleeve -0.20 m), a short one up to 2 cm above it (+0.13 m); short pants up to 3 cm above the
     knee (hem +0.17 m), short skirts 2.5 cm (+0.16 m); long skirts up to 2 cm below it (-0.16 m),
     long pants 14 cm (-0.25 m). Every other range as in 1.
+  - **3**: recipe 2 with recipe 1's short sleeves: a short sleeve ends 7 cm above the elbow or
+    higher, a long one down to 2.5 cm below it — a sleeve that reaches the elbow is long (rolled
+    and three-quarter sleeves are long sleeves; ``darts.photo.rules`` says the same). Recipe 2
+    draws short sleeves up to 2 cm above the elbow, which the read sleeve end cannot tell from a
+    long sleeve rolled to it.
 """
 from __future__ import annotations
 
@@ -66,11 +71,22 @@ _TO_THE_JOINTS = {"long-sleeve-top": {"sleeve": (-0.20, 0.0)}, "long-sleeve-dres
                   "short-sleeve-top": {"sleeve": (-0.04, 0.13)}, "short-sleeve-dress": {"sleeve": (-0.04, 0.13)},
                   "long-pants": {"hem": (-0.25, 0.02)}, "short-pants": {"hem": (-0.06, 0.17)},
                   "long-skirt": {"hem": (-0.16, 0.12)}, "short-skirt": {"hem": (-0.05, 0.16)}}
+_RECIPE_2 = {category: {**ranges, **_TO_THE_JOINTS.get(category, {})} for category, ranges in EDIT_RANGES.items()}
 #: the edit ranges of each recipe version (``--recipe``)
 RECIPES: dict[int, dict[str, dict[str, tuple[float, float]]]] = {
     1: EDIT_RANGES,
-    2: {category: {**ranges, **_TO_THE_JOINTS.get(category, {})} for category, ranges in EDIT_RANGES.items()},
+    2: _RECIPE_2,
+    3: {category: {**ranges, **(_SHORT_SLEEVE if category.startswith("short-sleeve") else {})}
+        for category, ranges in _RECIPE_2.items()},
 }
+
+
+def within_recipe(category: str, edits: dict[str, float], recipe: int) -> bool:
+    """Whether a garment of ``category`` with ``edits`` (name: metres) could be drawn by
+    ``RECIPES[recipe]``: every edit inside its range (a dataset of a wider recipe, its pictures kept
+    by this, is a sample of the narrower one)."""
+    ranges = RECIPES[recipe][category]
+    return set(edits) == set(ranges) and all(ranges[name][0] <= value <= ranges[name][1] for name, value in edits.items())
 DEFAULT_RECIPE = 1
 _CATEGORY, _SPLIT, _SHAPE, _EDITS, _LOOK = range(5)
 
