@@ -11,7 +11,8 @@ Several ``--data`` folders are one dataset: their train parts train, their valid
 parts (garments never trained on) validate.
 
 Data: every picture of the posed datasets (shipped: ``darts dataset make DIR --count 2400 --seed 100
---posed --views 6`` and ``--count 2400 --seed 102 --posed --views 4``: the garment worn and
+--posed --views 6``, ``--count 2400 --seed 102 --posed --views 4``, the same with ``--seed 103`` and
+with ``--seed 105 --recipe 2``, ``--within-recipe`` not given: the garment worn and
 ``meta.json``'s ``other`` garment with it, posed bodies, free cameras, clutter), read as a
 photograph is: BlazePose's person, the body fitted to it (``darts.photo.fit``), the parsing
 (``darts.photo.parsing``) and its measurements both ways (``darts.photo.attributes.measure``),

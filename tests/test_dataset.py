@@ -208,3 +208,25 @@ def test_finishing_a_dataset_with_another_seed_or_recipe_is_refused(tmp_path, ru
         code, out, err = run_darts("dataset", "make", tmp_path / "out", "--count", "2", *args)
         assert code == 2 and len(err.strip().splitlines()) == 1 and "was made with --seed 5 --recipe 1" in err, err
     assert manifest.read_text() == before and sorted(p.name for p in (tmp_path / "out").iterdir()) == ["garments"]
+
+
+def test_recipe_ends_read_a_lines_level_along_the_limb_and_the_gap_between_categories():
+    """``scripts/recipe_ends.py``: a plane across a two-bone limb at a quarter of its second bone
+    reads s = 0.625; the gap per recipe is the shortest long end less the longest short one, over
+    the garments that recipe could draw (a short sleeve lengthened by 0.10 m is recipe 2's, not 3's)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("recipe_ends", Path(__file__).parents[1] / "scripts" / "recipe_ends.py")
+    recipe_ends = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(recipe_ends)
+    limb = np.array([[0.0, 0.0, 0.0], [0.0, -0.3, 0.0], [0.0, -0.7, 0.0]])
+    assert recipe_ends.crossing(limb, np.array([0.05, -0.4, 0.0]), np.array([0.0, -1.0, 0.0])) == pytest.approx(0.625, abs=1e-3)
+    short_edits = {name: low for name, (low, _) in EDIT_RANGES["short-sleeve-top"].items()}
+    long_edits = {name: low for name, (low, _) in EDIT_RANGES["long-sleeve-top"].items()}
+    rows = [{"category": "short-sleeve-top", "edits": short_edits, "end": 0.30},
+            {"category": "short-sleeve-top", "edits": short_edits | {"sleeve": 0.10}, "end": 0.52},
+            {"category": "long-sleeve-top", "edits": long_edits, "end": 0.80},
+            {"category": "long-sleeve-top", "edits": long_edits | {"sleeve": -0.15}, "end": 0.47}]
+    gaps = recipe_ends.summarise(rows)["gaps"]["sleeve"]
+    assert gaps["1"]["gap"] == pytest.approx(0.50) and gaps["2"]["gap"] == pytest.approx(-0.05)
+    assert gaps["3"] == {"longest_short": 0.30, "shortest_long": 0.47, "gap": 0.17}
