@@ -4,12 +4,10 @@ recipes keep short and long sleeves, shorts and long pants, short and long skirt
     python scripts/recipe_ends.py DATASET [--out FILE.json]
 
 For every garment of ``DATASET/garments`` (its DART before the drape: rest pose on its own body
-shape, canonical frame): each end line — the cuffs, a lower garment's hems — as s along its limb
-(``darts.photo.attributes``' convention: 0 at the shoulder or hip, 0.5 at the elbow or knee, 1 at
-the wrist or ankle, linear along each bone, on the garment's body's rest landmarks,
-``darts.photo.lengths.rest_landmarks``): the s where the limb's polyline crosses the plane of the
-line (its centre and axis, ``darts.crdl.targets.loop_frame``); of two cuffs or legs the shorter.
-That is the s a photograph's read end (``sleeve_end``, ``hem_end``) measures, without the picture.
+shape, canonical frame): where it ends along its limb (``sim.dataset.recipe.garment_end``: the
+cuffs' or the legs' hems' s, ``darts.photo.attributes``' convention, 0 at the shoulder or hip, 0.5
+at the elbow or knee, 1 at the wrist or ankle; the s a photograph's read end measures, without
+the picture).
 Per category and per recipe (``sim.dataset.recipe.RECIPES``), the s range of the garments that
 recipe could draw (``within_recipe``), and per limb and recipe the gap between the longest short
 and the shortest long garment (negative: they overlap, and pictures there carry both labels).
@@ -28,44 +26,16 @@ LIMBS = {"sleeve": (("long-sleeve",), ("short-sleeve",)), "trouser leg": (("long
          "skirt": (("long-skirt",), ("short-skirt",))}
 
 
-def crossing(polyline: np.ndarray, centre: np.ndarray, axis: np.ndarray, samples: int = 2001) -> float:
-    """The s in [0, 1] where ``polyline`` (``darts.photo.attributes.point_at``) comes nearest to
-    crossing the plane through ``centre`` normal to ``axis``."""
-    from darts.photo.attributes import point_at
-
-    s = np.linspace(0.0, 1.0, samples)
-    level = np.array([np.dot(point_at(polyline, value) - centre, axis) for value in s])
-    return float(s[np.argmin(np.abs(level))])
-
-
-def garment_end(folder: Path, body) -> tuple[dict, float | None]:
-    """(the garment's ``meta.json``, its end s: ``None`` for a garment without a limb's end)."""
-    from darts.crdl.targets import loop_frame
+def garment_row(folder: Path, body) -> dict | None:
+    """A garment folder's category, edits and end (``sim.dataset.recipe.garment_end``); ``None``
+    for a garment without a limb's end."""
     from darts.dart.io import load_dart
-    from darts.geometry.loops import feature_lines
-    from darts.photo.attributes import ARM, LEG, chain
-    from darts.photo.lengths import rest_landmarks
+    from sim.dataset.recipe import garment_end
 
     meta = json.loads((folder / "meta.json").read_text())
-    category = meta["category"]
-    if "sleeveless" in category:
-        return meta, None
-    dart = load_dart(folder / "garment.npz")
-    lines = feature_lines(dart, dart.vertices)
-    centre = np.asarray(dart.vertices, np.float64).mean(0)
-    points = rest_landmarks(body, np.asarray(meta["betas"]))
-    ends = []
-    for side in ("left", "right"):
-        if "sleeve" in category:
-            name, polyline = f"{side}_cuff", chain(points, side, ARM)
-        elif "pants" in category:
-            name, polyline = f"{side}_hem", chain(points, side, LEG)
-        elif "skirt" in category:
-            name, polyline = "hem", 0.5 * (chain(points, "left", LEG) + chain(points, "right", LEG))
-        else:
-            return meta, None
-        ends.append(crossing(polyline, *loop_frame(np.asarray(lines[name], np.float64), centre)))
-    return meta, min(ends)
+    end = garment_end(load_dart(folder / "garment.npz"), body, meta["betas"])
+    return None if end is None else {"id": meta["id"], "category": meta["category"], "edits": meta["edits"],
+                                     "end": round(end, 4)}
 
 
 def summarise(rows: list[dict]) -> dict:
@@ -99,13 +69,8 @@ def main() -> None:
     from darts.body.io import load_body
 
     body = load_body(None)
-    rows = []
-    for folder in sorted((args.data / "garments").glob("g*")):
-        if not (folder / "garment.npz").is_file():
-            continue
-        meta, end = garment_end(folder, body)
-        if end is not None:
-            rows.append({"id": meta["id"], "category": meta["category"], "edits": meta["edits"], "end": round(end, 4)})
+    rows = [row for folder in sorted((args.data / "garments").glob("g*")) if (folder / "garment.npz").is_file()
+            for row in [garment_row(folder, body)] if row is not None]
     summary = {"data": str(args.data), **summarise(rows)}
     text = json.dumps(summary, indent=1)
     if args.out:

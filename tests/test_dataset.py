@@ -210,17 +210,15 @@ def test_finishing_a_dataset_with_another_seed_or_recipe_is_refused(tmp_path, ru
     assert manifest.read_text() == before and sorted(p.name for p in (tmp_path / "out").iterdir()) == ["garments"]
 
 
-def test_recipe_ends_read_a_lines_level_along_the_limb_and_the_gap_between_categories():
-    """``scripts/recipe_ends.py``: a plane across a two-bone limb at a quarter of its second bone
-    reads s = 0.625; the gap per recipe is the shortest long end less the longest short one, over
-    the garments that recipe could draw (a short sleeve lengthened by 0.10 m is recipe 2's, not 3's)."""
+def test_recipe_ends_give_the_gap_between_categories_per_recipe():
+    """``scripts/recipe_ends.py``: the gap per recipe is the shortest long end less the longest short
+    one, over the garments that recipe could draw (a short sleeve lengthened by 0.10 m is recipe 2's,
+    not 3's)."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("recipe_ends", Path(__file__).parents[1] / "scripts" / "recipe_ends.py")
     recipe_ends = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(recipe_ends)
-    limb = np.array([[0.0, 0.0, 0.0], [0.0, -0.3, 0.0], [0.0, -0.7, 0.0]])
-    assert recipe_ends.crossing(limb, np.array([0.05, -0.4, 0.0]), np.array([0.0, -1.0, 0.0])) == pytest.approx(0.625, abs=1e-3)
     short_edits = {name: low for name, (low, _) in EDIT_RANGES["short-sleeve-top"].items()}
     long_edits = {name: low for name, (low, _) in EDIT_RANGES["long-sleeve-top"].items()}
     rows = [{"category": "short-sleeve-top", "edits": short_edits, "end": 0.30},
@@ -230,3 +228,23 @@ def test_recipe_ends_read_a_lines_level_along_the_limb_and_the_gap_between_categ
     gaps = recipe_ends.summarise(rows)["gaps"]["sleeve"]
     assert gaps["1"]["gap"] == pytest.approx(0.50) and gaps["2"]["gap"] == pytest.approx(-0.05)
     assert gaps["3"] == {"longest_short": 0.30, "shortest_long": 0.47, "gap": 0.17}
+
+
+@pytest.mark.parametrize("category", ["short-pants", "short-sleeve-top"])
+def test_recipe_four_puts_each_garment_end_where_it_was_drawn_along_its_limb(body, category):
+    """Recipe 4 draws a length as the garment's end along its own body's limb (s): the garment
+    made from the recipe ends there (``garment_end``, within 0.01), its other edits are recipe 2's,
+    and every limb keeps a gap between its short and long categories."""
+    from sim.dataset.recipe import END_RANGES, END_SUFFIX, RECIPES, garment_end, recipe_garment
+
+    index = next(i for i in range(100) if garment_recipe(0, i, recipe=4).category == category)
+    recipe = garment_recipe(0, index, recipe=4)
+    drawn = dict(recipe.edits)
+    (name, end), = [(n, v) for n, v in drawn.items() if n.endswith(END_SUFFIX)]
+    low, high = RECIPES[4][category][name]
+    assert low <= end <= high and {n.removesuffix(END_SUFFIX) for n in drawn} == set(RECIPES[2][category])
+    dart, _, _ = recipe_garment(recipe, body)
+    assert garment_end(dart, body, recipe.betas) == pytest.approx(end, abs=0.01)
+    for kind in ("sleeve", "pants", "skirt"):
+        (_, short), (_, long) = END_RANGES[f"short-{kind}"], END_RANGES[f"long-{kind}"]
+        assert long[0] - short[1] > 0.049

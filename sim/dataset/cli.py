@@ -167,7 +167,8 @@ def add_parser(groups) -> None:
     parser.add_argument("--views", type=int, default=2, metavar="V", help="pictures per garment (default 2)")
     parser.add_argument("--recipe", type=int, choices=sorted(RECIPES), default=DEFAULT_RECIPE,
                         help="the edit ranges' version (docs/dataset.md; 2: sleeve and leg lengths up to the elbow and "
-                             "the knee; default 1)")
+                             "the knee; 3: 2 with 1's short sleeves; 4: each length drawn as where the garment ends "
+                             "along its body's limb; default 1)")
     parser.add_argument("--categories", nargs="+", metavar="C", help="only these categories (default: all ten)")
     parser.add_argument("--posed", action="store_true",
                         help="the posed dataset: each garment simulated on a shipped motion up to a random frame, with "

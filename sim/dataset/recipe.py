@@ -14,11 +14,11 @@ never depends on which other samples are made, in what order, or on which machin
   ranges keep categories apart (a lengthened short sleeve stops above the elbow, a shortened long
   sleeve below it; short pants and skirts stay above the knee, long ones below it). Waists of
   skirts and pants are not widened: a waistband 1.5 cm wider than the body slid 36 cm down the hips
-  in the drape (measured), where a real one is elastic. Three versions (``--recipe``), measured on the
+  in the drape (measured), where a real one is elastic. Four versions (``--recipe``), measured on the
   default body (upper arm 27.5 cm, forearm 24.4 cm; the long sleeve's cuff 2 cm above the wrist,
   the short one's 15 cm below the shoulder; the knee 32.5 cm below the hip):
 
-  - **1** (``EDIT_RANGES``, the default; what the shipped networks were trained on): a long sleeve
+  - **1** (``EDIT_RANGES``, the default; most of the shipped networks' data): a long sleeve
     ends 12.5 cm below the elbow or lower, a short one 7 cm above it or higher; short pants and
     skirts end 10 cm above the knee or higher, long skirts 8 cm below it and long pants 29 cm
     below it or lower: nothing is pictured near the boundaries, which real clothes reach (a
@@ -29,9 +29,17 @@ never depends on which other samples are made, in what order, or on which machin
     long pants 14 cm (-0.25 m). Every other range as in 1.
   - **3**: recipe 2 with recipe 1's short sleeves: a short sleeve ends 7 cm above the elbow or
     higher, a long one down to 2.5 cm below it — a sleeve that reaches the elbow is long (rolled
-    and three-quarter sleeves are long sleeves; ``darts.photo.rules`` says the same). Recipe 2
-    draws short sleeves up to 2 cm above the elbow, which the read sleeve end cannot tell from a
-    long sleeve rolled to it.
+    and three-quarter sleeves are long sleeves; ``darts.photo.rules`` says the same). Recipe 2's
+    short sleeves, 2 cm above the elbow at their longest on the default body, pass it on others.
+  - **4**: recipe 2 with each length — sleeves, trouser legs, skirts — drawn as where the garment
+    ends along its own body's limb (``END_RANGES``: s, 0.5 at the elbow or knee,
+    ``darts.photo.attributes``' convention) and turned into that body's length edit in metres
+    (``metres_edits``): short sleeves end at s = 0.17-0.42, long ones 0.47-0.93 (a sleeve that
+    reaches the elbow is long); short pants 0.16-0.44, long 0.60-0.97 (capris are long); short
+    skirts 0.18-0.44, long 0.56-0.90. Lengths in metres, set on the default body, end elsewhere on
+    other body shapes: recipe 2's short and long sleeves, legs and skirts overlap along the limb
+    (``scripts/recipe_ends.py``), so pictures there carry both labels; ends in s keep every
+    boundary's gap on every body. The meta's edits hold ``sleeve_end`` / ``hem_end`` (s).
 """
 from __future__ import annotations
 
@@ -79,6 +87,28 @@ RECIPES: dict[int, dict[str, dict[str, tuple[float, float]]]] = {
     3: {category: {**ranges, **(_SHORT_SLEEVE if category.startswith("short-sleeve") else {})}
         for category, ranges in _RECIPE_2.items()},
 }
+
+
+#: recipe 4's lengths (module docstring): per category prefix, the length edit and the s range of
+#: the garment's end along its own body's limb (``darts.photo.attributes``: 0.5 at the elbow or knee)
+END_RANGES = {"long-sleeve": ("sleeve", (0.47, 0.93)), "short-sleeve": ("sleeve", (0.17, 0.42)),
+              "long-pants": ("hem", (0.60, 0.97)), "short-pants": ("hem", (0.16, 0.44)),
+              "long-skirt": ("hem", (0.56, 0.90)), "short-skirt": ("hem", (0.18, 0.44))}
+END_SUFFIX = "_end"
+
+
+def _recipe_four() -> dict[str, dict[str, tuple[float, float]]]:
+    """Recipe 2's ranges with each category's length edit of ``END_RANGES`` drawn as its end (s)."""
+    four = {}
+    for category, ranges in _RECIPE_2.items():
+        length = next((value for prefix, value in END_RANGES.items() if category.startswith(prefix)), None)
+        four[category] = dict(ranges) if length is None else {
+            (name + END_SUFFIX if name == length[0] else name): (length[1] if name == length[0] else bounds)
+            for name, bounds in ranges.items()}
+    return four
+
+
+RECIPES[4] = _recipe_four()
 
 
 def within_recipe(category: str, edits: dict[str, float], recipe: int) -> bool:
@@ -148,9 +178,65 @@ def recipe_garment(recipe: GarmentRecipe, body, template=None) -> tuple:
                              ease=DATASET_EASE)
     built = time.perf_counter()
     welded = weld_garment(template)
-    targets = edit_targets(recipe.category, welded.vertices, welded.lines, list(recipe.edits))
+    edits = metres_edits(recipe.category, welded, body, recipe.betas, list(recipe.edits))
+    targets = edit_targets(recipe.category, welded.vertices, welded.lines, edits)
     dart, report = deform_dart(template, body, targets, clearance=DEFAULT_EASE)
     return dart, report, {"template_s": round(built - started, 3), "crdl_s": round(time.perf_counter() - built, 3)}
+
+
+def metres_edits(category: str, welded, body, betas, edits: list[tuple[str, float]]) -> list[tuple[str, float]]:
+    """``edits`` with each end (``sleeve_end``, ``hem_end``: s along the limb, recipe 4) made the
+    length edit (``sleeve``, ``hem``: metres along the line's axis) that takes the ``welded``
+    template's lines there: the mean over the lines it moves of (T - c) . n, with T the point at s on
+    the body's rest limb (``darts.photo.lengths.length_targets``, as a photograph's read end is
+    placed) and c, n the template line's centre and axis (``darts.crdl.targets.loop_frame``)."""
+    from darts.crdl.targets import loop_frame
+    from darts.photo.lengths import length_targets
+
+    centre = welded.vertices.mean(0)
+    out = []
+    for name, value in edits:
+        if not name.endswith(END_SUFFIX):
+            out.append((name, value))
+            continue
+        targets = length_targets(category, {name: value}, body, np.asarray(betas))
+        moves = [np.dot(target["point"] - frame[0], frame[1]) for line, target in targets.items() if line in welded.lines
+                 for frame in [loop_frame(welded.vertices[welded.lines[line]].astype(np.float64), centre)]]
+        out.append((name.removesuffix(END_SUFFIX), round(float(np.mean(moves)), 4)))
+    return out
+
+
+def garment_end(dart, body, betas) -> float | None:
+    """Where ``dart`` ends along its body's limb (shape ``betas``, rest pose, canonical frame): of
+    its cuffs (a sleeved garment) or its legs' hems (pants, skirts) the shorter end, each the s
+    (``darts.photo.attributes``' convention) at which the limb's polyline crosses the plane of the
+    line (its centre and axis, ``darts.crdl.targets.loop_frame``) — what a photograph's
+    ``sleeve_end`` or ``hem_end`` measures, without the picture; ``None`` for a garment without such
+    an end (sleeveless tops and dresses)."""
+    from darts.crdl.targets import loop_frame
+    from darts.geometry.loops import feature_lines
+    from darts.photo.attributes import ARM, LEG, chain, point_at
+    from darts.photo.lengths import rest_landmarks
+
+    category = dart.category
+    if "sleeveless" in category or not ("sleeve" in category or "pants" in category or "skirt" in category):
+        return None
+    lines = feature_lines(dart, dart.vertices)
+    centre = np.asarray(dart.vertices, np.float64).mean(0)
+    points = rest_landmarks(body, np.asarray(betas))
+    s = np.linspace(0.0, 1.0, 2001)
+    ends = []
+    for side in ("left", "right"):
+        if "sleeve" in category:
+            name, polyline = f"{side}_cuff", chain(points, side, ARM)
+        elif "pants" in category:
+            name, polyline = f"{side}_hem", chain(points, side, LEG)
+        else:
+            name, polyline = "hem", 0.5 * (chain(points, "left", LEG) + chain(points, "right", LEG))
+        middle, axis = loop_frame(np.asarray(lines[name], np.float64), centre)
+        level = np.array([np.dot(point_at(polyline, value) - middle, axis) for value in s])
+        ends.append(float(s[np.argmin(np.abs(level))]))
+    return min(ends)
 
 
 def write_json(path, data: dict) -> None:
