@@ -9,7 +9,7 @@ never depends on which other samples are made, in what order, or on which machin
   appearance never used in training (``test_unseen``, ``sim.dataset.appearance``).
 - **Body shape**: the first ``SHAPE_COUNT`` betas of the bundled body, each N(0, 1) (its PCA is
   scaled so) truncated to +-2; the others 0.
-- **Edits** (``RECIPES[recipe]``, metres, uniform in each range; hem / sleeve: > 0 lengthens, the
+- **Edits** (``RECIPES[recipe]``, metres (recipe 4's ends: s), uniform in each range; hem / sleeve: > 0 lengthens, the
   others widen): every edit of the category, so no two garments share their feature lines. The
   ranges keep categories apart (a lengthened short sleeve stops above the elbow, a shortened long
   sleeve below it; short pants and skirts stay above the knee, long ones below it). Waists of
@@ -80,15 +80,6 @@ _TO_THE_JOINTS = {"long-sleeve-top": {"sleeve": (-0.20, 0.0)}, "long-sleeve-dres
                   "long-pants": {"hem": (-0.25, 0.02)}, "short-pants": {"hem": (-0.06, 0.17)},
                   "long-skirt": {"hem": (-0.16, 0.12)}, "short-skirt": {"hem": (-0.05, 0.16)}}
 _RECIPE_2 = {category: {**ranges, **_TO_THE_JOINTS.get(category, {})} for category, ranges in EDIT_RANGES.items()}
-#: the edit ranges of each recipe version (``--recipe``)
-RECIPES: dict[int, dict[str, dict[str, tuple[float, float]]]] = {
-    1: EDIT_RANGES,
-    2: _RECIPE_2,
-    3: {category: {**ranges, **(_SHORT_SLEEVE if category.startswith("short-sleeve") else {})}
-        for category, ranges in _RECIPE_2.items()},
-}
-
-
 #: recipe 4's lengths (module docstring): per category prefix, the length edit and the s range of
 #: the garment's end along its own body's limb (``darts.photo.attributes``: 0.5 at the elbow or knee)
 END_RANGES = {"long-sleeve": ("sleeve", (0.47, 0.93)), "short-sleeve": ("sleeve", (0.17, 0.42)),
@@ -108,17 +99,24 @@ def _recipe_four() -> dict[str, dict[str, tuple[float, float]]]:
     return four
 
 
-RECIPES[4] = _recipe_four()
+#: the edit ranges of each recipe version (``--recipe``)
+RECIPES: dict[int, dict[str, dict[str, tuple[float, float]]]] = {
+    1: EDIT_RANGES,
+    2: _RECIPE_2,
+    3: {category: {**ranges, **(_SHORT_SLEEVE if category.startswith("short-sleeve") else {})}
+        for category, ranges in _RECIPE_2.items()},
+    4: _recipe_four(),
+}
+DEFAULT_RECIPE = 1
+_CATEGORY, _SPLIT, _SHAPE, _EDITS, _LOOK = range(5)
 
 
 def within_recipe(category: str, edits: dict[str, float], recipe: int) -> bool:
-    """Whether a garment of ``category`` with ``edits`` (name: metres) could be drawn by
+    """Whether a garment of ``category`` with ``edits`` (name: metres, or s for an end) could be drawn by
     ``RECIPES[recipe]``: every edit inside its range (a dataset of a wider recipe, its pictures kept
     by this, is a sample of the narrower one)."""
     ranges = RECIPES[recipe][category]
     return set(edits) == set(ranges) and all(ranges[name][0] <= value <= ranges[name][1] for name, value in edits.items())
-DEFAULT_RECIPE = 1
-_CATEGORY, _SPLIT, _SHAPE, _EDITS, _LOOK = range(5)
 
 
 def generator(seed: int, index: int, purpose: int, view: int = 0) -> np.random.Generator:
