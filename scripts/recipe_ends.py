@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-#: the limbs whose ends decide a category: (the long categories' prefixes, the short ones')
-LIMBS = {"sleeve": (("long-sleeve",), ("short-sleeve",)), "trouser leg": (("long-pants",), ("short-pants",)),
-         "skirt": (("long-skirt",), ("short-skirt",))}
+#: the limbs whose ends decide a category: (the long categories' prefix, the short ones')
+LIMBS = {"sleeve": ("long-sleeve", "short-sleeve"), "trouser leg": ("long-pants", "short-pants"),
+         "skirt": ("long-skirt", "short-skirt")}
 
 
 def garment_row(folder: Path, body) -> dict | None:
@@ -61,7 +61,7 @@ def summarise(rows: list[dict]) -> dict:
     return {"garments": len(rows), "ends": ranges, "gaps": gaps}
 
 
-def main() -> None:
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", type=Path)
     parser.add_argument("--out", type=Path)
